@@ -1,0 +1,59 @@
+#pragma once
+/// @file Error policy (STYLE.md 3.5).
+///
+/// - CG_VERIFY(cond, fmt, args...): always on; for bad input or numerical failures a user can
+///   cause. Throws coarsegrain::Error (or the subclass given to CG_VERIFY_AS) with a message
+///   that says what failed, the offending value, and what to change.
+/// - CG_ASSERT(cond, msg): internal contracts, debug builds only.
+#include <fmt/format.h>
+
+#include <cassert>
+#include <stdexcept>
+#include <string>
+
+namespace coarsegrain {
+
+/// Base of every error coarsegrain reports to a user.
+class Error : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// A scene file is invalid; the message names the JSON key.
+class InvalidScene : public Error {
+public:
+    using Error::Error;
+};
+
+/// A mesh file could not be read; the message names the file and line.
+class MeshReadError : public Error {
+public:
+    using Error::Error;
+};
+
+/// A matrix that must be symmetric positive definite is not (e.g. no Dirichlet condition).
+class NotPositiveDefinite : public Error {
+public:
+    using Error::Error;
+};
+
+namespace detail {
+template <class E = Error>
+[[noreturn]] void fail(const std::string& message) {
+    throw E(message);
+}
+}  // namespace detail
+
+}  // namespace coarsegrain
+
+#define CG_VERIFY(cond, ...)                                                   \
+    do {                                                                       \
+        if (!(cond)) ::coarsegrain::detail::fail(fmt::format(__VA_ARGS__));    \
+    } while (0)
+
+#define CG_VERIFY_AS(ErrorType, cond, ...)                                              \
+    do {                                                                                \
+        if (!(cond)) ::coarsegrain::detail::fail<ErrorType>(fmt::format(__VA_ARGS__));  \
+    } while (0)
+
+#define CG_ASSERT(cond, msg) assert((cond) && (msg))

@@ -1,0 +1,27 @@
+#pragma once
+/// @file Helpers shared by the tests.
+#include <string>
+
+#include "coarsegrain/common/types.hpp"
+#include "coarsegrain/mesh/mesh.hpp"
+
+namespace coarsegrain::test {
+
+/// The rigid motions of a point set (#V by dim): dim translations and dim(dim-1)/2
+/// infinitesimal rotations, as columns of a (dim*#V) by (3 or 6) matrix (interleaved DOFs).
+Matrix rigid_modes(const Matrix& X);
+
+/// The interleaved field u(x) = A x + b at every node.
+Vector linear_field(const Matrix& X, const Matrix& A, const Eigen::VectorXd& b);
+
+/// Moves every interior node of a grid mesh by a random offset of up to `amount` times the grid
+/// spacing (fixed seed), keeping elements valid. Boundary nodes stay put.
+void distort_interior(mesh::Mesh& mesh, double amount, unsigned seed = 1);
+
+/// A fresh empty temporary folder for one test (removed at the start of the next run).
+std::string temp_dir(const std::string& name);
+
+/// Runs a shell command, returns its exit code; stdout+stderr go to `output` if non-null.
+int run(const std::string& command, std::string* output = nullptr);
+
+}  // namespace coarsegrain::test
