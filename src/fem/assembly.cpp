@@ -70,7 +70,7 @@ void gather(const mesh::Mesh& mesh, Skeleton& s, ElementMatrixOf&& Ke) {
     const Index nv = mesh.num_nodes();
     const Index* outer = s.A.outerIndexPtr();
     double* values = s.A.valuePtr();
-#pragma omp parallel
+#pragma omp parallel if (nv >= detail::kMinParallel)
     {
         // position[w] = index of node w in the adjacency list of the current node.
         std::vector<Index> position(static_cast<std::size_t>(nv), 0);
@@ -112,7 +112,7 @@ void scatter_coloured(const mesh::Mesh& mesh, Skeleton& s, ComputeElementMatrix&
         const Index begin = colouring.ptr[c];
         detail::parallel_for(colouring.ptr[c + 1] - begin, [&](Index i) {
             const Index e = colouring.element[begin + i];
-            const auto K = compute(e);
+            const auto K = detail::for_element(e, [&] { return compute(e); });
             for (int b = 0; b < S::npe; ++b) {
                 const Index vb = mesh.elements(e, b);
                 const Index* adj = s.graph.adj.data() + s.graph.ptr[vb];
@@ -181,12 +181,13 @@ SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterial
                 if (congruent_grid(mesh)) cell = kernels::load_weights<S>(grid_cell<S>(*mesh.grid));
             detail::parallel_for(mesh.num_elements(), [&](Index e) {
                 w[e] = mats.of(e).density *
-                       (cell ? *cell
-                             : kernels::load_weights<S>(kernels::element_coords<S>(mesh, e)));
+                       (cell ? *cell : detail::for_element(e, [&] {
+                           return kernels::load_weights<S>(kernels::element_coords<S>(mesh, e));
+                       }));
             });
             const detail::NodeElements inc = detail::node_elements(mesh);
             Vector diag(S::dim * nv);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nv >= detail::kMinParallel)
             for (Index v = 0; v < nv; ++v) {
                 double m = 0;
                 for (Index k = inc.ptr[v]; k < inc.ptr[v + 1]; ++k)
