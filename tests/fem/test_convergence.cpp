@@ -138,8 +138,9 @@ class ConvergenceSlow : public ::testing::TestWithParam<ConvergenceCase> {};
 
 // Manufactured smooth solution with the exact body force and exact Dirichlet data on the whole
 // boundary: the L2 error must fall as O(h^2) and the energy error as O(h) for P1 and Q1 in 2D
-// and 3D. Slopes are least-squares fits over 3-4 meshes, asserted > 1.8 and > 0.9. Measured
-// (L2, energy): tri 2.00, 0.99; quad 2.00, 1.00; tet 1.97, 0.98; hex 1.99, 1.00.
+// and 3D. Slopes are least-squares fits over 4 meshes each (2D: 8..64 cells per side, 3D:
+// 4..12), asserted > 1.8 and > 0.9. Measured (L2, energy): tri 1.994, 0.998; quad 2.000,
+// 0.999; tet 1.926, 0.982; hex 1.988, 0.998 (tet on 4, 8, 16: 1.937, 0.984).
 TEST_P(ConvergenceSlow, ManufacturedSolutionConvergesAtTheOptimalRate) {
     const auto& [type, cells] = GetParam();
     std::vector<Errors> runs;
@@ -157,8 +158,8 @@ INSTANTIATE_TEST_SUITE_P(
     AllTypes, ConvergenceSlow,
     ::testing::Values(ConvergenceCase{ElementType::Tri3, {8, 16, 32, 64}},
                       ConvergenceCase{ElementType::Quad4, {8, 16, 32, 64}},
-                      ConvergenceCase{ElementType::Tet4, {4, 8, 16}},
-                      ConvergenceCase{ElementType::Hex8, {4, 8, 16}}),
+                      ConvergenceCase{ElementType::Tet4, {4, 6, 8, 12}},
+                      ConvergenceCase{ElementType::Hex8, {4, 6, 8, 12}}),
     [](const auto& param_info) { return mesh::element_name(param_info.param.type); });
 
 }  // namespace
