@@ -1,4 +1,8 @@
 #include <gtest/gtest.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <random>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/assembly.hpp"
@@ -134,30 +138,57 @@ TEST_P(AssemblyTest, GridCacheAndMassTotals) {
     }
 }
 
-// Meshes large enough that every parallel loop runs on all threads (node loops and each colour
-// of the coloured scatter above detail::kMinParallel = 512 iterations): the result still equals
-// the serial triplet assembly to round-off (1e-14 relative), so the colouring leaves no race.
+/// Renumbers the nodes by a random permutation (fixed seed): a numbering without locality.
+void shuffle_nodes(mesh::Mesh& m, unsigned seed) {
+    std::vector<Index> perm = test::all_indices(m.num_nodes());
+    std::shuffle(perm.begin(), perm.end(), std::mt19937(seed));
+    Matrix X(m.rest_positions.rows(), m.rest_positions.cols());
+    for (Index v = 0; v < m.num_nodes(); ++v) X.row(perm[v]) = m.rest_positions.row(v);
+    m.rest_positions = X;
+    for (Index e = 0; e < m.num_elements(); ++e)
+        for (Index a = 0; a < m.elements.cols(); ++a) m.elements(e, a) = perm[m.elements(e, a)];
+}
+
+/// Runs f with OpenMP set to `threads` threads, then restores the previous setting.
+template <class F>
+void with_threads(int threads, F&& f) {
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(threads);
+    f();
+    omp_set_num_threads(before);
+}
+
+// Meshes large enough that every parallel loop runs on 2 threads (node loops, the owner-computes
+// scatter with 4 node ranges; with shuffled node numbers the coloured scatter, each colour above
+// detail::kMinParallel = 512 elements): the result equals the serial triplet assembly to
+// round-off (1e-14 relative), so neither scheme leaves a race.
 TEST(AssemblyParallel, MediumMeshesEqualSerialAssembly) {
-    for (const ElementType type : {ElementType::Hex8, ElementType::Tet4, ElementType::Tri3}) {
-        const int n = type == ElementType::Hex8 ? 18 : type == ElementType::Tet4 ? 14 : 100;
-        const int dim = mesh::element_dim(type);
-        mesh::Mesh m = mesh::make_grid(type, Eigen::VectorXd::Zero(dim),
-                                       Eigen::VectorXd::Ones(dim), Eigen::VectorXi::Constant(dim, n));
-        const material::ElementMaterials grid_mats = two_materials(m);
-        if (type == ElementType::Hex8) {
-            EXPECT_LT(relative_difference(fem::stiffness_matrix(m, grid_mats),
-                                          triplet_assembly(m, grid_mats, 0)),
-                      1e-14);
-        }
-        test::distort_interior(m, type == ElementType::Hex8 ? 0.25 : 0.1);
-        const material::ElementMaterials mats = two_materials(m);
-        EXPECT_LT(relative_difference(fem::stiffness_matrix(m, mats), triplet_assembly(m, mats, 0)),
-                  1e-14)
-            << mesh::element_name(type);
-        EXPECT_LT(relative_difference(fem::mass_matrix(m, mats, fem::MassType::Consistent),
-                                      triplet_assembly(m, mats, 1)),
-                  1e-14);
-    }
+    with_threads(2, [] {
+        for (const ElementType type : {ElementType::Hex8, ElementType::Tet4, ElementType::Tri3})
+            for (const bool shuffled : {false, true}) {
+                const int n = type == ElementType::Hex8 ? 18 : type == ElementType::Tet4 ? 14 : 100;
+                const int dim = mesh::element_dim(type);
+                mesh::Mesh m = mesh::make_grid(type, Eigen::VectorXd::Zero(dim),
+                                               Eigen::VectorXd::Ones(dim),
+                                               Eigen::VectorXi::Constant(dim, n));
+                if (shuffled) shuffle_nodes(m, 4);
+                const material::ElementMaterials grid_mats = two_materials(m);
+                if (type == ElementType::Hex8) {
+                    EXPECT_LT(relative_difference(fem::stiffness_matrix(m, grid_mats),
+                                                  triplet_assembly(m, grid_mats, 0)),
+                              1e-14);
+                }
+                test::distort_interior(m, type == ElementType::Hex8 ? 0.25 : 0.1);
+                const material::ElementMaterials mats = two_materials(m);
+                EXPECT_LT(relative_difference(fem::stiffness_matrix(m, mats),
+                                              triplet_assembly(m, mats, 0)),
+                          1e-14)
+                    << mesh::element_name(type) << (shuffled ? " shuffled" : "");
+                EXPECT_LT(relative_difference(fem::mass_matrix(m, mats, fem::MassType::Consistent),
+                                              triplet_assembly(m, mats, 1)),
+                          1e-14);
+            }
+    });
 }
 
 TEST(AssemblyErrors, MismatchedMaterials) {
