@@ -17,19 +17,6 @@ namespace {
 
 using mesh::ElementType;
 
-void verify_materials(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
-                      const char* what) {
-    CG_VERIFY(mats.size() == mesh.num_elements(),
-              "{}: {} element materials for {} elements", what, mats.size(),
-              mesh.num_elements());
-    CG_VERIFY(mats.dim == mesh.dim(), "{}: materials are {}D but the mesh is {}D", what,
-              mats.dim, mesh.dim());
-    const Index nt = static_cast<Index>(mats.table.size());
-    for (Index e = 0; e < mats.size(); ++e)
-        CG_VERIFY(mats.index[e] >= 0 && mats.index[e] < nt,
-                  "{}: element {} uses material {} of a table of {}", what, e, mats.index[e], nt);
-}
-
 /// True when every element is a congruent, equally oriented copy of the grid cell (make_grid).
 bool congruent_grid(const mesh::Mesh& mesh) {
     return mesh.grid && (mesh.type == ElementType::Quad4 || mesh.type == ElementType::Hex8);
@@ -217,7 +204,7 @@ void scatter(const mesh::Mesh& mesh, Skeleton& s, ComputeElementMatrix&& compute
 }  // namespace
 
 SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats) {
-    verify_materials(mesh, mats, "stiffness_matrix");
+    detail::verify_materials(mesh, mats, "stiffness_matrix");
     return kernels::dispatch(mesh.type, [&](auto shape) {
         using S = decltype(shape);
         constexpr int n = mandel_size(S::dim);
@@ -246,7 +233,7 @@ SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMat
 
 SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
                          MassType type) {
-    verify_materials(mesh, mats, "mass_matrix");
+    detail::verify_materials(mesh, mats, "mass_matrix");
     return kernels::dispatch(mesh.type, [&](auto shape) {
         using S = decltype(shape);
         using Scalar = Eigen::Matrix<double, S::npe, S::npe>;

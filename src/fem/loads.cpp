@@ -13,9 +13,7 @@ Vector gravity_load(const mesh::Mesh& mesh, const material::ElementMaterials& ma
     const int dim = mesh.dim();
     CG_VERIFY(g.size() == dim, "gravity_load: gravity has {} components, expected {}", g.size(),
               dim);
-    CG_VERIFY(mats.size() == mesh.num_elements(),
-              "gravity_load: {} element materials for {} elements", mats.size(),
-              mesh.num_elements());
+    detail::verify_materials(mesh, mats, "gravity_load");
     return kernels::dispatch(mesh.type, [&](auto shape) {
         using S = decltype(shape);
         using Weights = Eigen::Matrix<double, S::npe, 1>;

@@ -6,6 +6,18 @@
 
 namespace coarsegrain::fem::detail {
 
+void verify_materials(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
+                      const char* what) {
+    CG_VERIFY(mats.size() == mesh.num_elements(), "{}: {} element materials for {} elements",
+              what, mats.size(), mesh.num_elements());
+    CG_VERIFY(mats.dim == mesh.dim(), "{}: materials are {}D but the mesh is {}D", what,
+              mats.dim, mesh.dim());
+    const Index nt = static_cast<Index>(mats.table.size());
+    for (Index e = 0; e < mats.size(); ++e)
+        CG_VERIFY(mats.index[e] >= 0 && mats.index[e] < nt,
+                  "{}: element {} uses material {} of a table of {}", what, e, mats.index[e], nt);
+}
+
 NodeElements node_elements(const mesh::Mesh& mesh) {
     const Index nv = mesh.num_nodes(), ne = mesh.num_elements();
     const int npe = static_cast<int>(mesh.elements.cols());

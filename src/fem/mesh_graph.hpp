@@ -7,6 +7,7 @@
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 
 namespace coarsegrain::fem::detail {
@@ -43,6 +44,11 @@ decltype(auto) for_element(Index e, F&& f) {
         throw Error(fmt::format("element {}: {}", e, error.what()));
     }
 }
+
+/// Checks that mats describes the elements of mesh: one valid table index per element and the
+/// mesh's dimension. `what` names the caller in the message.
+void verify_materials(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
+                      const char* what);
 
 /// Node -> incident elements (CSR), each with the node's local index in that element.
 /// Elements of a node are in increasing order.

@@ -33,9 +33,7 @@ ElementStress element_stress(const mesh::Mesh& mesh, const material::ElementMate
     const int dim = mesh.dim();
     CG_VERIFY(u.size() == mesh.num_dofs(), "element_stress: u has {} entries, expected {}",
               u.size(), mesh.num_dofs());
-    CG_VERIFY(mats.size() == mesh.num_elements(),
-              "element_stress: {} element materials for {} elements", mats.size(),
-              mesh.num_elements());
+    detail::verify_materials(mesh, mats, "element_stress");
     const int n = mandel_size(dim);
     ElementStress out;
     out.strain.resize(mesh.num_elements(), n);
