@@ -17,12 +17,8 @@ constexpr std::array<std::array<int, 4>, 3> kTriEdges = {{{0, 1}, {1, 2}, {2, 0}
 constexpr std::array<std::array<int, 4>, 4> kQuadEdges = {{{0, 1}, {1, 2}, {2, 3}, {3, 0}}};
 constexpr std::array<std::array<int, 4>, 4> kTetFaces = {
     {{0, 1, 3}, {1, 2, 3}, {2, 0, 3}, {0, 2, 1}}};
-constexpr std::array<std::array<int, 4>, 6> kHexFaces = {{{0, 4, 7, 3},
-                                                          {1, 2, 6, 5},
-                                                          {0, 1, 5, 4},
-                                                          {3, 7, 6, 2},
-                                                          {0, 3, 2, 1},
-                                                          {4, 5, 6, 7}}};
+constexpr std::array<std::array<int, 4>, 6> kHexFaces = {
+    {{0, 4, 7, 3}, {1, 2, 6, 5}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 3, 2, 1}, {4, 5, 6, 7}}};
 
 struct FacetTable {
     std::span<const std::array<int, 4>> facets;
@@ -31,10 +27,14 @@ struct FacetTable {
 
 FacetTable facet_table(ElementType type) {
     switch (type) {
-        case ElementType::Tri3: return {kTriEdges, 2};
-        case ElementType::Quad4: return {kQuadEdges, 2};
-        case ElementType::Tet4: return {kTetFaces, 3};
-        case ElementType::Hex8: return {kHexFaces, 4};
+        case ElementType::Tri3:
+            return {kTriEdges, 2};
+        case ElementType::Quad4:
+            return {kQuadEdges, 2};
+        case ElementType::Tet4:
+            return {kTetFaces, 3};
+        case ElementType::Hex8:
+            return {kHexFaces, 4};
     }
     return {};
 }
@@ -245,7 +245,8 @@ Boundary boundary(const Mesh& mesh) {
         const int lf = static_cast<int>(f % nf);
         b.owner[k] = e;
         b.local_facet[k] = lf;
-        for (int a = 0; a < table.nodes; ++a) b.facets(k, a) = mesh.elements(e, table.facets[lf][a]);
+        for (int a = 0; a < table.nodes; ++a)
+            b.facets(k, a) = mesh.elements(e, table.facets[lf][a]);
         ++k;
     }
     facet_geometry(mesh, b);

@@ -1,11 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <functional>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/mesh/grid.hpp"
+#include "mesh/drop_elements.hpp"
 #include "test_util.hpp"
 
 using namespace coarsegrain;
@@ -13,36 +13,10 @@ using mesh::ElementType;
 
 namespace {
 
-// Removes the elements whose centroid satisfies `drop` and the nodes no longer used,
-// renumbering the rest in their original order.
-mesh::Mesh drop_elements(const mesh::Mesh& m,
-                         const std::function<bool(const Eigen::VectorXd&)>& drop) {
-    const Matrix centres = mesh::element_centroids(m);
-    std::vector<Index> kept;
-    for (Index e = 0; e < m.num_elements(); ++e)
-        if (!drop(centres.row(e).transpose())) kept.push_back(e);
-    std::vector<Index> new_id(m.num_nodes(), -1);
-    for (Index e : kept)
-        for (Index a = 0; a < m.elements.cols(); ++a) new_id[m.elements(e, a)] = 0;
-    Index nv = 0;
-    for (Index& id : new_id)
-        if (id == 0) id = nv++;
-    mesh::Mesh out;
-    out.type = m.type;
-    out.rest_positions.resize(nv, m.dim());
-    for (Index v = 0; v < m.num_nodes(); ++v)
-        if (new_id[v] >= 0) out.rest_positions.row(new_id[v]) = m.rest_positions.row(v);
-    out.elements.resize(static_cast<Index>(kept.size()), m.elements.cols());
-    for (size_t i = 0; i < kept.size(); ++i)
-        for (Index a = 0; a < m.elements.cols(); ++a)
-            out.elements(static_cast<Index>(i), a) = new_id[m.elements(kept[i], a)];
-    out.material_ids = IndexVector::Zero(out.num_elements());
-    return out;
-}
-
 Eigen::VectorXd facet_centre(const mesh::Mesh& m, const mesh::Boundary& b, Index f) {
     Eigen::VectorXd c = Eigen::VectorXd::Zero(m.dim());
-    for (Index a = 0; a < b.facets.cols(); ++a) c += m.rest_positions.row(b.facets(f, a)).transpose();
+    for (Index a = 0; a < b.facets.cols(); ++a)
+        c += m.rest_positions.row(b.facets(f, a)).transpose();
     return c / static_cast<double>(b.facets.cols());
 }
 
@@ -131,7 +105,8 @@ TEST_P(BoundaryTest, BoxGridFacetsTileTheSurface) {
             const Index e = b.owner[f];
             for (Index a = 0; a < b.facets.cols(); ++a) {
                 bool found = false;
-                for (Index c = 0; c < m.elements.cols(); ++c) found |= m.elements(e, c) == b.facets(f, a);
+                for (Index c = 0; c < m.elements.cols(); ++c)
+                    found |= m.elements(e, c) == b.facets(f, a);
                 EXPECT_TRUE(found);
             }
         }
@@ -162,7 +137,7 @@ TEST_P(BoundaryTest, CavityIsASecondComponent) {
     const auto in_block = [](const Eigen::VectorXd& c) {
         return (c.array() > 1.0 / 3).all() && (c.array() < 2.0 / 3).all();
     };
-    const mesh::Mesh m = drop_elements(mesh::make_grid(type, lo, hi, cells), in_block);
+    const mesh::Mesh m = test::drop_elements(mesh::make_grid(type, lo, hi, cells), in_block);
     const mesh::Boundary b = mesh::boundary(m);
     ASSERT_EQ(b.num_components, 2);
 
@@ -198,8 +173,8 @@ TEST_P(BoundaryTest, CavityIsASecondComponent) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, BoundaryTest,
-                         ::testing::Values(ElementType::Tri3, ElementType::Quad4,
-                                           ElementType::Tet4, ElementType::Hex8),
+                         ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                           ElementType::Hex8),
                          [](const ::testing::TestParamInfo<ElementType>& param_info) {
                              return mesh::element_name(param_info.param);
                          });
@@ -214,7 +189,7 @@ TEST(Boundary, CavitiesAreNumberedBySize) {
         const bool large = c[0] > 5 && c[0] < 8 && c[1] > 1 && c[1] < 4;
         return small || large;
     };
-    const mesh::Mesh m = drop_elements(grid, in_holes);
+    const mesh::Mesh m = test::drop_elements(grid, in_holes);
     const mesh::Boundary b = mesh::boundary(m);
     ASSERT_EQ(b.num_components, 3);
     std::array<int, 3> count{0, 0, 0};
