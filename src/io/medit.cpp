@@ -30,6 +30,19 @@ bool is_keyword(std::string_view token) {
     return !iequals(token, "nan") && !iequals(token, "inf") && !iequals(token, "infinity");
 }
 
+/// Section keywords of the Medit format (libMeshb's list, the ones seen in practice): inside a
+/// section, one of these means the section ended early; any other word is a bad number.
+bool is_section_keyword(std::string_view token) {
+    static const char* const kKeywords[] = {
+        "MeshVersionFormatted", "Dimension", "Vertices", "Edges", "Triangles", "Quadrilaterals",
+        "Tetrahedra", "Prisms", "Hexahedra", "Pyramids", "Corners", "Ridges", "RequiredVertices",
+        "RequiredEdges", "RequiredTriangles", "RequiredQuadrilaterals", "Normals", "Tangents",
+        "NormalAtVertices", "NormalAtTriangleVertices", "TangentAtEdges", "TangentAtVertices",
+        "Identifier", "Geometry", "End"};
+    return std::any_of(std::begin(kKeywords), std::end(kKeywords),
+                       [&](const char* k) { return iequals(token, k); });
+}
+
 const char* medit_keyword(ElementType type) {
     switch (type) {
         case ElementType::Tri3: return "Triangles";
@@ -115,7 +128,7 @@ private:
     /// count (a truncated or miscounted file).
     std::string_view entry_token(const char* section, Index i, Index n) {
         const std::string_view token = m_in.require_token(section);
-        if (is_keyword(token))
+        if (is_section_keyword(token))
             m_in.fail("expected entry {} of {} of {}, found {}: the section holds fewer entries "
                       "than announced",
                       i + 1, n, section, quoted(token));

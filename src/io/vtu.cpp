@@ -173,7 +173,8 @@ public:
                                                 "per {})",
                                                 c, offsets[c], npe * (c + 1.0), npe,
                                                 mesh::element_name(mesh.type)));
-        const std::vector<double> connectivity = read_array(connectivity_array, m, npe);
+        const std::vector<double> connectivity =
+            read_array(connectivity_array, static_cast<std::size_t>(m) * npe, 1);
         mesh.elements.resize(m, npe);
         for (Index c = 0; c < m; ++c)
             for (int a = 0; a < npe; ++a) {
@@ -284,7 +285,8 @@ private:
             if (components < 1 || components > (1 << 16))
                 fail(*a, fmt::format("NumberOfComponents {} is out of the range 1..65536",
                                      components));
-            const std::vector<double> values = read_array(*a, rows, components);
+            const std::vector<double> values =
+                read_array(*a, static_cast<std::size_t>(rows), components);
             Field f{*name, Matrix(rows, components)};
             for (Index i = 0; i < rows; ++i)
                 for (Index j = 0; j < components; ++j)
@@ -293,13 +295,14 @@ private:
         }
     }
 
-    /// Reads a DataArray of rows x components values (any VTK scalar type) as doubles.
-    std::vector<double> read_array(const XmlElement& a, Index rows, Index components) const {
+    /// Reads a DataArray of rows x components values (any VTK scalar type) as doubles;
+    /// NumberOfComponents, if given, must equal `components`.
+    std::vector<double> read_array(const XmlElement& a, std::size_t rows, Index components) const {
         if (const std::string* c = a.attribute("NumberOfComponents");
             c && parse_count(a, *c, "NumberOfComponents") != components)
             fail(a, fmt::format("expected NumberOfComponents=\"{}\", found {}", components,
                                 quoted(*c)));
-        const std::size_t count = static_cast<std::size_t>(rows) * components;
+        const std::size_t count = rows * static_cast<std::size_t>(components);
         const std::string* type = a.attribute("type");
         if (!type) fail(a, "<DataArray> has no type attribute");
         int size = 0;
