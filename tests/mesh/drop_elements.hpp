@@ -7,8 +7,8 @@
 
 namespace coarsegrain::test {
 
-// Removes the elements whose centroid satisfies `drop` and the nodes no longer used,
-// renumbering the rest in their original order.
+/// Removes the elements whose centroid satisfies `drop` and the nodes no longer used,
+/// renumbering the rest in their original order (material ids reset to 0).
 inline mesh::Mesh drop_elements(const mesh::Mesh& m,
                                 const std::function<bool(const Eigen::VectorXd&)>& drop) {
     const Matrix centres = mesh::element_centroids(m);

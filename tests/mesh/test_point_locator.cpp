@@ -173,8 +173,8 @@ INSTANTIATE_TEST_SUITE_P(AllTypes, PointLocatorTest,
 
 // 100K queries on a distorted ~50K-element hex grid and tet grid. Measured about 0.25 s
 // (hex) and 0.1 s (tet) in Release; the 2 s bound only catches a broken index (a linear scan
-// would take minutes).
-TEST(PointLocator, ManyQueriesAreFast) {
+// would take minutes). "Slow" keeps this timing test out of the sanitizer run.
+TEST(PointLocatorSlow, ManyQueriesAreFast) {
     for (const auto& [type, n] : {std::pair{ElementType::Hex8, 37}, {ElementType::Tet4, 20}}) {
         mesh::Mesh m = mesh::make_grid(type, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(),
                                        Eigen::Vector3i(n, n, n + 1));
