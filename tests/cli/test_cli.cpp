@@ -86,8 +86,11 @@ TEST(Cli, SolveWritesSummaryAndVtuWithTheContractKeys) {
     std::vector<std::string> names;
     for (const auto& f : fields.point_data) names.push_back(f.name);
     for (const auto& f : fields.cell_data) names.push_back(f.name);
-    for (const char* name : {"displacement", "material_id", "E", "stress", "von_mises"})
+    for (const char* name : {"displacement", "E", "stress", "von_mises"})
         EXPECT_THAT(names, ::testing::Contains(std::string(name)));
+    // read_vtu returns the "material_id" cell field as the mesh's material ids.
+    EXPECT_EQ(m.material_ids.minCoeff(), 1);
+    EXPECT_EQ(m.material_ids.maxCoeff(), 2);
     for (const auto& entry : fs::directory_iterator(dir + "/out"))
         EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
             << "temporary file left behind: " << entry.path();
@@ -163,7 +166,7 @@ INSTANTIATE_TEST_SUITE_P(
                  "mesh.grid.element: unknown element"},
         BadScene{"bad_backend", [](json& j) { j["solver"] = {{"backend", "magic"}}; },
                  "solver.backend"}),
-    [](const auto& info) { return info.param.name; });
+    [](const auto& p) { return p.param.name; });
 
 TEST(Cli, InvalidJsonNamesTheFile) {
     const std::string dir = test::temp_dir("cli_invalid_json");
