@@ -27,13 +27,17 @@ How CalculiX is driven
   receive force and in which direction (a positive P pushes into the element):
       C3D8: P1 = 1-2-3-4, P2 = 5-8-7-6, P3 = 1-5-6-2, P4 = 2-6-7-3, P5 = 3-7-8-4, P6 = 4-8-5-1
       C3D4: P1 = 1-2-3,   P2 = 1-4-2,   P3 = 2-4-3,   P4 = 3-4-1
-  (1-based local node numbers; this matches the CalculiX manual's element face tables.)
+  (1-based local node numbers, as in the CalculiX manual's element face tables; the
+  right-hand normal of each listed node cycle points into the element.)
 - Dirichlet: *BOUNDARY, <nset>, 1, 3 (zero displacement).
 - Output: *NODE PRINT, NSET=NALL with U, into <job>.dat; the displacements are parsed from
   there. ccx prints them in E13.6 format, i.e. 7 significant digits, so each stored value
   carries a relative rounding error of at most 5e-7 of itself; the stored numbers are the
   printed decimals exactly (json floats round-trip them).
 - ccx's linear solver on Debian 12 (calculix-ccx 2.20) is SPOOLES (direct, symmetric).
+- Cross-check when this was written: a 60-line dense numpy FEM of the same problems (Q1 with
+  2x2x2 Gauss, P1, consistent gravity and pressure loads) matched the stored displacements to
+  2.3e-7 (hex) and 9.1e-8 (tet) in max norm relative to max |u|, i.e. to the printed digits.
 
 Each json file holds the exact problem (node coordinates, 0-based connectivity in our node
 order, material ids and materials, gravity, pressure and the loaded faces, Dirichlet nodes),
@@ -44,7 +48,8 @@ Rerun
     python3 scripts/calculix/make_reference.py            # writes tests/data/calculix/*.json
     python3 scripts/calculix/make_reference.py --keep DIR # also keeps the .inp/.dat in DIR
 Needs ccx on the PATH (Debian package calculix-ccx, installed by scripts/setup.sh) and
-Python 3 with numpy. bench/ccx_vs_coarsegrain.py imports the helpers of this file.
+Debian's Python 3 with python3-numpy (/usr/bin/python3 if another python3 comes first on
+the PATH). bench/ccx_vs_coarsegrain.py imports the helpers of this file.
 """
 
 import argparse
