@@ -175,9 +175,10 @@ def run_ccx(workdir, job, env=None):
     return proc.stdout
 
 
-def parse_displacements(dat_path, num_nodes):
-    """The U block of a *NODE PRINT in a .dat file: #V x 3, as printed (E13.6)."""
-    u = np.full((num_nodes, 3), np.nan)
+def parse_displacements(dat_path, nodes):
+    """The U block of a *NODE PRINT in a .dat file at the given 0-based nodes: len(nodes) x 3,
+    as printed (E13.6). Raises if a node is missing."""
+    printed = {}
     reading = False
     with open(dat_path) as f:
         for line in f:
@@ -187,13 +188,14 @@ def parse_displacements(dat_path, num_nodes):
             if reading:
                 parts = line.split()
                 if len(parts) == 4 and parts[0].isdigit():
-                    u[int(parts[0]) - 1] = [float(v) for v in parts[1:]]
+                    printed[int(parts[0]) - 1] = [float(v) for v in parts[1:]]
                 elif parts:
                     reading = False
-    if np.isnan(u).any():
-        raise RuntimeError(f"{dat_path}: displacements of {int(np.isnan(u).any(axis=1).sum())} "
-                           f"of {num_nodes} nodes missing")
-    return u
+    missing = [v for v in nodes if v not in printed]
+    if missing:
+        raise RuntimeError(f"{dat_path}: displacements of {len(missing)} of {len(nodes)} nodes "
+                           f"missing (first: node {missing[0] + 1})")
+    return np.array([printed[v] for v in nodes], float)
 
 
 def ccx_version():
@@ -256,7 +258,8 @@ def main():
         write_inp(os.path.join(workdir, element + ".inp"), element, p["nodes"], p["elements"],
                   p["material_ids"], MATERIALS, GRAVITY, p["faces"], PRESSURE, p["fixed"])
         stdout = run_ccx(workdir, element)
-        u = parse_displacements(os.path.join(workdir, element + ".dat"), len(p["nodes"]))
+        u = parse_displacements(os.path.join(workdir, element + ".dat"),
+                                 range(len(p["nodes"])))
         record = {
             "name": element,
             "description": "heterogeneous box clamped at x = 0 under gravity and a pressure on "
