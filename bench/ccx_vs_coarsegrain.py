@@ -15,8 +15,8 @@ significant digits, so agreement is expected to about 1e-6).
 
 Both times are of the whole program (read input, assemble, factorize, solve, write output);
 coarsegrain's own phase timings from summary.json are printed too. Both programs get the same
-thread count (--threads, default: all cores) through OMP_NUM_THREADS, and for ccx also
-CCX_NPROC_EQUATION_SOLVER; the table shows the solver and thread count ccx reports using.
+thread count (--threads, default: all cores): coarsegrain through its --threads option, ccx
+through OMP_NUM_THREADS and CCX_NPROC_EQUATION_SOLVER; the table shows the solver and thread count ccx reports using.
 
 Usage:
     python3 bench/ccx_vs_coarsegrain.py [build/coarsegrain] [--cells 48 18 18] [--repeat 3]
@@ -135,8 +135,8 @@ def main():
           f"{args.threads} thread(s); files in {workdir}", flush=True)
     t_ccx, ccx_out = best_time(["ccx", "-i", "beam"], workdir, env, args.repeat)
     out_dir = os.path.join(workdir, "cg_out")
-    t_cg, _ = best_time([cg, "solve", scene_path, "--out", out_dir, "--quiet"], workdir, env,
-                        args.repeat)
+    t_cg, _ = best_time([cg, "--quiet", "--threads", str(args.threads), "solve", scene_path,
+                         "--out", out_dir], workdir, env, args.repeat)
 
     u_ccx = ccxref.parse_displacements(os.path.join(workdir, "beam.dat"), probe_nodes)
     with open(os.path.join(out_dir, "summary.json")) as f:
