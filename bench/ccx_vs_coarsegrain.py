@@ -55,9 +55,9 @@ PROBES = [[4.0, 0.75, 0.75], [4.0, 0.0, 0.0], [4.0, 1.5, 1.5], [2.0, 0.75, 1.5],
 EPS = 1e-9
 
 
-def best_time(command, cwd, env, repeat):
-    """Best wall-clock time of `repeat` runs, and the last run's standard output."""
-    best, stdout = float("inf"), ""
+def run_timed(command, cwd, env, repeat):
+    """Wall-clock times of `repeat` runs (sorted, best first), and the last run's stdout."""
+    times, stdout = [], ""
     for _ in range(repeat):
         start = time.perf_counter()
         proc = subprocess.run(command, cwd=cwd, env=env, capture_output=True, text=True)
@@ -65,8 +65,9 @@ def best_time(command, cwd, env, repeat):
         if proc.returncode != 0:
             raise RuntimeError(f"`{' '.join(command)}` failed (exit {proc.returncode}):\n"
                                f"{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}")
-        best, stdout = min(best, elapsed), proc.stdout
-    return best, stdout
+        times.append(elapsed)
+        stdout = proc.stdout
+    return sorted(times), stdout
 
 
 def main():
@@ -133,9 +134,9 @@ def main():
     print(f"problem: {args.cells[0]}x{args.cells[1]}x{args.cells[2]} hex cells, {len(nodes)} "
           f"nodes, {dofs} DOFs, {len(elements)} elements; best of {args.repeat} runs, "
           f"{args.threads} thread(s); files in {workdir}", flush=True)
-    t_ccx, ccx_out = best_time(["ccx", "-i", "beam"], workdir, env, args.repeat)
+    runs_ccx, ccx_out = run_timed(["ccx", "-i", "beam"], workdir, env, args.repeat)
     out_dir = os.path.join(workdir, "cg_out")
-    t_cg, _ = best_time([cg, "--quiet", "--threads", str(args.threads), "solve", scene_path,
+    runs_cg, _ = run_timed([cg, "--quiet", "--threads", str(args.threads), "solve", scene_path,
                          "--out", out_dir], workdir, env, args.repeat)
 
     u_ccx = ccxref.parse_displacements(os.path.join(workdir, "beam.dat"), probe_nodes)
@@ -152,12 +153,14 @@ def main():
     ccx_label += f", {cpus.group(1)} cpu(s))" if cpus else ")"
     timings = summary.get("fine", {}).get("timings", {})
     cg_label = "coarsegrain solve (" + ", ".join(f"{k} {v:.3f}s" for k, v in timings.items()) + ")"
+    t_ccx, t_cg = runs_ccx[0], runs_cg[0]
     width = max(len(ccx_label), len(cg_label))
     print()
-    print(f"{'program':<{width}}  {'best wall [s]':>13}")
-    print(f"{ccx_label:<{width}}  {t_ccx:13.3f}")
-    print(f"{cg_label:<{width}}  {t_cg:13.3f}")
+    print(f"{'program':<{width}}  {'best wall [s]':>13}  all runs [s]")
+    print(f"{ccx_label:<{width}}  {t_ccx:13.3f}  " + " ".join(f"{t:.3f}" for t in runs_ccx))
+    print(f"{cg_label:<{width}}  {t_cg:13.3f}  " + " ".join(f"{t:.3f}" for t in runs_cg))
     print(f"{'ratio ccx / coarsegrain':<{width}}  {t_ccx / t_cg:13.2f}")
+    print("(coarsegrain's phase timings are those of its last run)")
 
     print()
     print(f"{'probe point':<28} {'u (ccx)':<48} {'rel. difference':>15}")
