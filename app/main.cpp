@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
         "coarsegrain: numerical coarsening of heterogeneous linear-elastic materials.\n"
         "Every command writes DIR/summary.json and DIR/*.vtu (open them in ParaView)."};
     app.require_subcommand(1);
+    app.fallthrough();  // global options may also follow the subcommand
     bool quiet = false;
     int threads = 0;
     app.add_flag("-q,--quiet", quiet, "no progress lines on stderr");
