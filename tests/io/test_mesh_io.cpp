@@ -198,6 +198,22 @@ TEST(GmshReference, Gmsh41TrianglesAndHexes) {
     EXPECT_NEAR(total_measure(hex), 2.0, 1e-12);
 }
 
+// Sections the reader does not need are skipped whatever they hold, before and after the mesh.
+TEST(GmshReader, SkipsUnknownSections) {
+    const std::string file = test::temp_dir("io_gmsh_sections") + "/s.msh";
+    std::ofstream(file) << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
+                           "$Comments\n$Nodes\nnot a node\n$EndComments\n"
+                           "$PhysicalNames\n1\n3 7 \"soft\"\n$EndPhysicalNames\n"
+                           "$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n"
+                           "$Elements\n1\n1 4 2 7 1 1 2 3 4\n$EndElements\n"
+                           "$Periodic\n1\n2 1 2\n$EndPeriodic\n"
+                           "$NodeData\n1\n\"u\"\n$EndNodeData\n";
+    const mesh::Mesh m = io::read_gmsh(file);
+    EXPECT_EQ(m.num_elements(), 1);
+    EXPECT_EQ(m.material_ids[0], 7);
+    EXPECT_NEAR(total_measure(m), 1.0 / 6.0, 1e-16);
+}
+
 // tetgen -Q on the unit cube's corners: 1-based, no attributes, 6 positive tets.
 TEST(TetGenReference, CubeFromTetGen) {
     const mesh::Mesh m = io::read_tetgen(kData + "/tetgen_cube.1");
