@@ -49,8 +49,8 @@ inline void check_round_trips(const mesh::Mesh& m, const io::VtuFields& fields,
     const auto [back, back_fields] = io::read_vtu(dir + "/rt.vtu");
     expect(same_mesh(back, m), "vtu");
     for (const auto* group : {&fields.point_data, &fields.cell_data}) {
-        const auto& other = group == &fields.point_data ? back_fields.point_data
-                                                        : back_fields.cell_data;
+        const auto& other =
+            group == &fields.point_data ? back_fields.point_data : back_fields.cell_data;
         expect(other.size() == group->size(), "vtu field count");
         for (std::size_t i = 0; i < other.size(); ++i)
             expect(other[i].name == (*group)[i].name &&
@@ -75,7 +75,9 @@ inline void read_fuzz_input(const std::uint8_t* data, std::size_t size, const st
     mesh::Mesh m;
     io::VtuFields fields;
     switch (data[0] % 4) {
-        case 0: m = io::read_gmsh(write("input.msh", body)); break;
+        case 0:
+            m = io::read_gmsh(write("input.msh", body));
+            break;
         case 1: {
             const std::size_t nul = body.find('\0');
             write("input.node", body.substr(0, nul));
@@ -86,8 +88,12 @@ inline void read_fuzz_input(const std::uint8_t* data, std::size_t size, const st
             m = io::read_tetgen(dir + "/input");
             break;
         }
-        case 2: m = io::read_medit(write("input.mesh", body)); break;
-        default: std::tie(m, fields) = io::read_vtu(write("input.vtu", body)); break;
+        case 2:
+            m = io::read_medit(write("input.mesh", body));
+            break;
+        default:
+            std::tie(m, fields) = io::read_vtu(write("input.vtu", body));
+            break;
     }
     check_round_trips(m, fields, dir);
 }

@@ -24,9 +24,10 @@ mesh::Mesh read_mesh(const std::string& file) {
     if (ext == ".meshb")
         throw MeshReadError(fmt::format(
             "{}: binary Medit files (.meshb) are not supported; save as ASCII .mesh", file));
-    throw MeshReadError(fmt::format("{}: unknown mesh file extension '{}'; expected .msh (Gmsh), "
-                                    ".node/.ele (TetGen), .mesh (Medit) or .vtu",
-                                    file, ext));
+    throw MeshReadError(
+        fmt::format("{}: unknown mesh file extension '{}'; expected .msh (Gmsh), "
+                    ".node/.ele (TetGen), .mesh (Medit) or .vtu",
+                    file, ext));
 }
 
 void write_mesh(const std::string& file, const mesh::Mesh& mesh) {
@@ -35,9 +36,10 @@ void write_mesh(const std::string& file, const mesh::Mesh& mesh) {
     if (ext == ".node" || ext == ".ele") return write_tetgen(file, mesh);
     if (ext == ".mesh") return write_medit(file, mesh);
     if (ext == ".vtu") return write_vtu(file, mesh, {});
-    throw Error(fmt::format("cannot write {}: unknown mesh file extension '{}'; expected .msh, "
-                            ".node/.ele, .mesh or .vtu",
-                            file, ext));
+    throw Error(
+        fmt::format("cannot write {}: unknown mesh file extension '{}'; expected .msh, "
+                    ".node/.ele, .mesh or .vtu",
+                    file, ext));
 }
 
 }  // namespace coarsegrain::io

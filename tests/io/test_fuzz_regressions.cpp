@@ -21,7 +21,8 @@ namespace fs = std::filesystem;
 std::vector<fs::path> inputs(const fs::path& folder) {
     std::vector<fs::path> out;
     for (const auto& entry : fs::directory_iterator(folder))
-        if (entry.is_regular_file() && entry.path().extension() != ".md") out.push_back(entry.path());
+        if (entry.is_regular_file() && entry.path().extension() != ".md")
+            out.push_back(entry.path());
     return out;
 }
 

@@ -57,7 +57,8 @@ double total_measure(const mesh::Mesh& m) {
 /// Measure of the elements of each material id.
 std::map<Index, double> measure_by_material(const mesh::Mesh& m) {
     std::map<Index, double> out;
-    for (Index e = 0; e < m.num_elements(); ++e) out[m.material_ids[e]] += mesh::element_measure(m, e);
+    for (Index e = 0; e < m.num_elements(); ++e)
+        out[m.material_ids[e]] += mesh::element_measure(m, e);
     return out;
 }
 
@@ -65,11 +66,16 @@ enum class Format { Gmsh2, Gmsh4, TetGen, Medit, Vtu };
 
 std::string format_name(Format f) {
     switch (f) {
-        case Format::Gmsh2: return "gmsh22";
-        case Format::Gmsh4: return "gmsh41";
-        case Format::TetGen: return "tetgen";
-        case Format::Medit: return "medit";
-        case Format::Vtu: return "vtu";
+        case Format::Gmsh2:
+            return "gmsh22";
+        case Format::Gmsh4:
+            return "gmsh41";
+        case Format::TetGen:
+            return "tetgen";
+        case Format::Medit:
+            return "medit";
+        case Format::Vtu:
+            return "vtu";
     }
     return "?";
 }
@@ -110,14 +116,12 @@ std::string round_trip_name(const ::testing::TestParamInfo<std::tuple<Format, El
     return format_name(std::get<0>(i.param)) + "_" + mesh::element_name(std::get<1>(i.param));
 }
 
-INSTANTIATE_TEST_SUITE_P(AllTypes, RoundTrip,
-                         ::testing::Combine(::testing::Values(Format::Gmsh2, Format::Gmsh4,
-                                                              Format::Medit, Format::Vtu),
-                                            ::testing::Values(ElementType::Tri3,
-                                                              ElementType::Quad4,
-                                                              ElementType::Tet4,
-                                                              ElementType::Hex8)),
-                         round_trip_name);
+INSTANTIATE_TEST_SUITE_P(
+    AllTypes, RoundTrip,
+    ::testing::Combine(::testing::Values(Format::Gmsh2, Format::Gmsh4, Format::Medit, Format::Vtu),
+                       ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                         ElementType::Hex8)),
+    round_trip_name);
 INSTANTIATE_TEST_SUITE_P(Simplices, RoundTrip,
                          ::testing::Combine(::testing::Values(Format::TetGen),
                                             ::testing::Values(ElementType::Tri3,
