@@ -11,8 +11,12 @@ struct Dirichlet {
     std::vector<Index> dofs;
     Vector values;
 
-    /// Prescribes all dim components of each node. Later calls override earlier values.
+    /// Prescribes all dim components of each node (dim = value.size(), DOF dim*node + d).
+    /// Later calls override earlier values of the same DOF.
     void fix_nodes(const std::vector<Index>& nodes, const Eigen::VectorXd& value);
+    /// Prescribes one component (0..dim-1) of each node, e.g. a roller or symmetry condition.
+    /// Later calls override earlier values of the same DOF.
+    void fix_component(const std::vector<Index>& nodes, int dim, int component, double value);
     bool empty() const { return dofs.empty(); }
 };
 
@@ -23,7 +27,10 @@ struct ReducedSystem {
     IndexVector free_dofs; ///< reduced index -> full DOF
 };
 
-/// Eliminates the Dirichlet DOFs from K u = f.
+/// Eliminates the Dirichlet DOFs from K u = f in O(nnz(K)): K_ff is copied column by column
+/// (K must be compressed, both triangles stored) and only the prescribed columns are read for
+/// K_fd u_d.
+/// @throws Error if sizes disagree or bc.dofs is not sorted, unique and in range
 ReducedSystem reduce(const SparseMatrix& K, const Vector& f, const Dirichlet& bc);
 
 /// Full solution from the free-DOF solution and the prescribed values.

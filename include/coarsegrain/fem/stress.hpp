@@ -8,7 +8,11 @@ namespace coarsegrain::fem {
 struct ElementStress {
     Matrix strain;     ///< #E by mandel_size(dim), Mandel
     Matrix stress;     ///< #E by mandel_size(dim), Mandel
-    Vector von_mises;  ///< #E; in 2D plane strain sigma_zz = C_zz,ij eps_ij enters, plane stress 0
+    /// #E von Mises stress of the full 3D stress. In 2D the out-of-plane stress enters:
+    /// plane strain sigma_zz = lambda (e11 + e22) (= C_zz11 e11 + C_zz22 e22 of the 3D isotropic
+    /// tensor, from the material's E and nu), plane stress sigma_zz = 0. Anisotropic 2D
+    /// materials (nu is NaN) carry no out-of-plane coupling, so sigma_zz = 0 is used for them.
+    Vector von_mises;
 };
 
 /// Strain, stress and von Mises stress at each element centre for displacement u.

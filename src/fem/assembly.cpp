@@ -1,0 +1,227 @@
+#include "coarsegrain/fem/assembly.hpp"
+
+#include <algorithm>
+#include <optional>
+
+#include "coarsegrain/common/error.hpp"
+#include "element_kernels.hpp"
+#include "mesh_graph.hpp"
+
+namespace coarsegrain::fem {
+
+namespace {
+
+using mesh::ElementType;
+
+void verify_materials(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
+                      const char* what) {
+    CG_VERIFY(mats.size() == mesh.num_elements(),
+              "{}: {} element materials for {} elements", what, mats.size(),
+              mesh.num_elements());
+    CG_VERIFY(mats.dim == mesh.dim(), "{}: materials are {}D but the mesh is {}D", what,
+              mats.dim, mesh.dim());
+    const Index nt = static_cast<Index>(mats.table.size());
+    for (Index e = 0; e < mats.size(); ++e)
+        CG_VERIFY(mats.index[e] >= 0 && mats.index[e] < nt,
+                  "{}: element {} uses material {} of a table of {}", what, e, mats.index[e], nt);
+}
+
+/// True when every element is a congruent, equally oriented copy of the grid cell (make_grid).
+bool congruent_grid(const mesh::Mesh& mesh) {
+    return mesh.grid && (mesh.type == ElementType::Quad4 || mesh.type == ElementType::Hex8);
+}
+
+/// Corner positions of one grid cell (the element of every cell of a Quad4/Hex8 grid).
+template <class S>
+kernels::Coords<S> grid_cell(const mesh::GridInfo& grid) {
+    const Eigen::Vector3d h = grid.spacing();
+    kernels::Coords<S> X;
+    for (int a = 0; a < S::npe; ++a)
+        for (int d = 0; d < S::dim; ++d) X(a, d) = S::kCorners[a][d] * h[d];
+    return X;
+}
+
+/// Everything the scatter needs: incidence, adjacency and the empty compressed matrix A (held
+/// by reference: Eigen 3.4's SparseMatrix has no move constructor, so the result is built in
+/// the caller's variable to avoid copying hundreds of MB).
+struct Skeleton {
+    detail::NodeElements incidence;
+    detail::NodeGraph graph;
+    SparseMatrix& A;
+};
+
+/// zero = false leaves the values uninitialized: gather() writes every entry.
+Skeleton skeleton(const mesh::Mesh& mesh, bool full_blocks, bool zero, SparseMatrix& A) {
+    Skeleton s{detail::node_elements(mesh), {}, A};
+    s.graph = detail::node_graph(mesh, s.incidence);
+    detail::block_pattern(s.graph, mesh.dim(), full_blocks, zero, A);
+    return s;
+}
+
+/// Gathers precomputed element matrices into the columns of each node (one node per iteration,
+/// so threads write disjoint columns: race free without colouring). Ke(e) returns the element
+/// matrix of element e (a reference into a small cache). Full dim x dim blocks if Full, else
+/// the scalar matrix Ke(e)(a, b) on the diagonal of each block. The node's columns are zeroed
+/// here (they are contiguous and stay in cache), so the pattern need not be.
+template <class S, bool Full, class ElementMatrixOf>
+void gather(const mesh::Mesh& mesh, Skeleton& s, ElementMatrixOf&& Ke) {
+    constexpr int dim = S::dim;
+    constexpr int per_block = Full ? dim : 1;
+    const Index nv = mesh.num_nodes();
+    const Index* outer = s.A.outerIndexPtr();
+    double* values = s.A.valuePtr();
+#pragma omp parallel
+    {
+        // position[w] = index of node w in the adjacency list of the current node.
+        std::vector<Index> position(static_cast<std::size_t>(nv), 0);
+#pragma omp for schedule(static)
+        for (Index v = 0; v < nv; ++v) {
+            const Index first = s.graph.ptr[v];
+            for (Index p = first; p < s.graph.ptr[v + 1]; ++p) position[s.graph.adj[p]] = p - first;
+            std::fill(values + outer[dim * v], values + outer[dim * v + dim], 0.0);
+            for (Index k = s.incidence.ptr[v]; k < s.incidence.ptr[v + 1]; ++k) {
+                const Index e = s.incidence.element[k];
+                const int b = s.incidence.local[k];
+                const auto& K = Ke(e);
+                for (int a = 0; a < S::npe; ++a) {
+                    const Index offset = per_block * position[mesh.elements(e, a)];
+                    for (int j = 0; j < dim; ++j) {
+                        double* col = values + outer[dim * v + j] + offset;
+                        if constexpr (Full) {
+                            for (int i = 0; i < dim; ++i) col[i] += K(dim * a + i, dim * b + j);
+                        } else {
+                            col[0] += K(a, b);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Scatters element matrices computed on the fly, one colour at a time: elements of one colour
+/// share no node, so no two threads write the same entry.
+template <class S, bool Full, class ComputeElementMatrix>
+void scatter_coloured(const mesh::Mesh& mesh, Skeleton& s, ComputeElementMatrix&& compute) {
+    constexpr int dim = S::dim;
+    constexpr int per_block = Full ? dim : 1;
+    const detail::Colouring colouring = detail::colour_elements(mesh, s.incidence);
+    const Index* outer = s.A.outerIndexPtr();
+    double* values = s.A.valuePtr();
+    for (Index c = 0; c < colouring.num_colours(); ++c) {
+        const Index begin = colouring.ptr[c];
+        detail::parallel_for(colouring.ptr[c + 1] - begin, [&](Index i) {
+            const Index e = colouring.element[begin + i];
+            const auto K = compute(e);
+            for (int b = 0; b < S::npe; ++b) {
+                const Index vb = mesh.elements(e, b);
+                const Index* adj = s.graph.adj.data() + s.graph.ptr[vb];
+                const Index deg = s.graph.ptr[vb + 1] - s.graph.ptr[vb];
+                for (int a = 0; a < S::npe; ++a) {
+                    const Index p = static_cast<Index>(
+                        std::lower_bound(adj, adj + deg, mesh.elements(e, a)) - adj);
+                    for (int j = 0; j < dim; ++j) {
+                        double* col = values + outer[dim * vb + j] + per_block * p;
+                        if constexpr (Full) {
+                            for (int r = 0; r < dim; ++r) col[r] += K(dim * a + r, dim * b + j);
+                        } else {
+                            col[0] += K(a, b);
+                        }
+                    }
+                }
+            }
+        });
+    }
+}
+
+}  // namespace
+
+SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats) {
+    verify_materials(mesh, mats, "stiffness_matrix");
+    return kernels::dispatch(mesh.type, [&](auto shape) {
+        using S = decltype(shape);
+        constexpr int n = mandel_size(S::dim);
+        SparseMatrix K;
+        const bool cached = congruent_grid(mesh);
+        Skeleton s = skeleton(mesh, true, !cached, K);
+        if constexpr (!S::simplex) {
+            if (cached) {
+                const kernels::Coords<S> X = grid_cell<S>(*mesh.grid);
+                std::vector<kernels::ElementMatrix<S>> cache;
+                for (const material::Material& m : mats.table)
+                    cache.push_back(kernels::stiffness<S>(X, m.C.topLeftCorner<n, n>()));
+                gather<S, true>(mesh, s, [&](Index e) -> const kernels::ElementMatrix<S>& {
+                    return cache[static_cast<std::size_t>(mats.index[e])];
+                });
+                return K;
+            }
+        }
+        scatter_coloured<S, true>(mesh, s, [&](Index e) {
+            return kernels::stiffness<S>(kernels::element_coords<S>(mesh, e),
+                                         mats.of(e).C.template topLeftCorner<n, n>());
+        });
+        return K;
+    });
+}
+
+SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
+                         MassType type) {
+    verify_materials(mesh, mats, "mass_matrix");
+    return kernels::dispatch(mesh.type, [&](auto shape) {
+        using S = decltype(shape);
+        using Scalar = Eigen::Matrix<double, S::npe, S::npe>;
+        using Weights = Eigen::Matrix<double, S::npe, 1>;
+        const Index nv = mesh.num_nodes();
+        SparseMatrix M;  // the one returned variable (NRVO: no copy of a large matrix)
+        if (type == MassType::Lumped) {
+            // Row sums of the consistent mass: m_v = sum over incident elements of rho ∫ N_v.
+            std::vector<Weights> w(static_cast<std::size_t>(mesh.num_elements()));
+            std::optional<Weights> cell;
+            if constexpr (!S::simplex)
+                if (congruent_grid(mesh)) cell = kernels::load_weights<S>(grid_cell<S>(*mesh.grid));
+            detail::parallel_for(mesh.num_elements(), [&](Index e) {
+                w[e] = mats.of(e).density *
+                       (cell ? *cell
+                             : kernels::load_weights<S>(kernels::element_coords<S>(mesh, e)));
+            });
+            const detail::NodeElements inc = detail::node_elements(mesh);
+            Vector diag(S::dim * nv);
+#pragma omp parallel for schedule(static)
+            for (Index v = 0; v < nv; ++v) {
+                double m = 0;
+                for (Index k = inc.ptr[v]; k < inc.ptr[v + 1]; ++k)
+                    m += w[inc.element[k]][inc.local[k]];
+                diag.segment<S::dim>(S::dim * v).setConstant(m);
+            }
+            M.resize(S::dim * nv, S::dim * nv);
+            M.resizeNonZeros(S::dim * nv);
+            for (Index i = 0; i < S::dim * nv; ++i) {
+                M.outerIndexPtr()[i] = i;
+                M.innerIndexPtr()[i] = i;
+                M.valuePtr()[i] = diag[i];
+            }
+            M.outerIndexPtr()[S::dim * nv] = S::dim * nv;
+            return M;
+        }
+        const bool cached = congruent_grid(mesh);
+        Skeleton s = skeleton(mesh, false, !cached, M);
+        if constexpr (!S::simplex) {
+            if (cached) {
+                const Scalar cell = kernels::scalar_mass<S>(grid_cell<S>(*mesh.grid), 1.0);
+                std::vector<Scalar> cache;
+                for (const material::Material& m : mats.table) cache.push_back(m.density * cell);
+                gather<S, false>(mesh, s, [&](Index e) -> const Scalar& {
+                    return cache[static_cast<std::size_t>(mats.index[e])];
+                });
+                return M;
+            }
+        }
+        scatter_coloured<S, false>(mesh, s, [&](Index e) {
+            return kernels::scalar_mass<S>(kernels::element_coords<S>(mesh, e),
+                                           mats.of(e).density);
+        });
+        return M;
+    });
+}
+
+}  // namespace coarsegrain::fem

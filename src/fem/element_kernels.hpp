@@ -1,0 +1,284 @@
+#pragma once
+/// @file Dimension-generic fixed-size element kernels (private to src/fem).
+///
+/// One traits struct per element type (Shape<T>) gives the reference shape functions and their
+/// gradients; everything else (Jacobian, B matrix, stiffness, mass, load weights) is written
+/// once for all four types. Q1 elements live on [0,1]^dim, P1 elements on the unit simplex.
+#include <fmt/ranges.h>
+
+#include <array>
+#include <cmath>
+
+#include "coarsegrain/common/error.hpp"
+#include "coarsegrain/common/types.hpp"
+#include "coarsegrain/mesh/mesh.hpp"
+
+namespace coarsegrain::fem::kernels {
+
+using mesh::ElementType;
+
+/// Mandel shear components (row, i, j): strain row `row` is √2 e_ij.
+template <int Dim>
+struct ShearPairs;
+template <>
+struct ShearPairs<2> {
+    static constexpr std::array<std::array<int, 3>, 1> value = {{{2, 0, 1}}};
+};
+template <>
+struct ShearPairs<3> {
+    static constexpr std::array<std::array<int, 3>, 3> value = {
+        {{3, 1, 2}, {4, 0, 2}, {5, 0, 1}}};
+};
+
+/// Quadrature rule on the reference element: points (Dim each) and weights.
+template <int Dim, int N>
+struct Rule {
+    std::array<Eigen::Matrix<double, Dim, 1>, N> points;
+    std::array<double, N> weights;
+};
+
+/// Tensor-product Gauss-Legendre rule with P points per axis on [0,1]^Dim.
+template <int Dim, int P>
+Rule<Dim, (Dim == 2 ? P * P : P * P * P)> gauss_cube() {
+    static_assert(P == 1 || P == 2 || P == 3, "1, 2 or 3 Gauss points per axis");
+    std::array<double, P> x{}, w{};
+    if constexpr (P == 1) {
+        x = {0.5};
+        w = {1.0};
+    } else if constexpr (P == 2) {
+        const double g = 0.5 / std::sqrt(3.0);
+        x = {0.5 - g, 0.5 + g};
+        w = {0.5, 0.5};
+    } else {
+        const double g = 0.5 * std::sqrt(0.6);
+        x = {0.5 - g, 0.5, 0.5 + g};
+        w = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+    }
+    Rule<Dim, (Dim == 2 ? P * P : P * P * P)> rule;
+    int q = 0;
+    for (int k = 0; k < (Dim == 3 ? P : 1); ++k)
+        for (int j = 0; j < P; ++j)
+            for (int i = 0; i < P; ++i, ++q) {
+                rule.points[q][0] = x[i];
+                rule.points[q][1] = x[j];
+                rule.weights[q] = w[i] * w[j];
+                if constexpr (Dim == 3) {
+                    rule.points[q][2] = x[k];
+                    rule.weights[q] *= w[k];
+                }
+            }
+    return rule;
+}
+
+/// Reference Q1 element on [0,1]^Dim; corner a sits at kCorners[a] (orderings of ElementType).
+template <int Dim>
+struct Q1 {
+    static constexpr int dim = Dim;
+    static constexpr int npe = Dim == 2 ? 4 : 8;
+    static constexpr bool simplex = false;
+    static constexpr std::array<std::array<int, 3>, 8> kCorners = {
+        {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
+    using Point = Eigen::Matrix<double, Dim, 1>;
+
+    static Eigen::Matrix<double, npe, 1> N(const Point& xi) {
+        Eigen::Matrix<double, npe, 1> n;
+        for (int a = 0; a < npe; ++a) {
+            n[a] = 1.0;
+            for (int k = 0; k < Dim; ++k) n[a] *= kCorners[a][k] ? xi[k] : 1.0 - xi[k];
+        }
+        return n;
+    }
+    /// npe by Dim reference gradients dN_a / dxi_k.
+    static Eigen::Matrix<double, npe, Dim> dN(const Point& xi) {
+        Eigen::Matrix<double, npe, Dim> g;
+        for (int a = 0; a < npe; ++a)
+            for (int d = 0; d < Dim; ++d) {
+                double v = 1.0;
+                for (int k = 0; k < Dim; ++k) {
+                    const bool one = kCorners[a][k] != 0;
+                    v *= k == d ? (one ? 1.0 : -1.0) : (one ? xi[k] : 1.0 - xi[k]);
+                }
+                g(a, d) = v;
+            }
+        return g;
+    }
+    static Point centre() { return Point::Constant(0.5); }
+    /// 2 Gauss points per axis: exact stiffness on parallelograms / parallelepipeds.
+    static auto stiffness_rule() { return gauss_cube<Dim, 2>(); }
+    /// 3 Gauss points per axis: N_a N_b det J has degree <= 4 per axis on any Q1 element.
+    static auto mass_rule() { return gauss_cube<Dim, 3>(); }
+    /// 2 Gauss points per axis: N_a det J has degree <= 3 per axis.
+    static auto load_rule() { return gauss_cube<Dim, 2>(); }
+};
+
+/// Reference P1 simplex with corners 0, e_1, .., e_Dim; N = (1 - sum xi, xi_1, .., xi_Dim).
+template <int Dim>
+struct P1 {
+    static constexpr int dim = Dim;
+    static constexpr int npe = Dim + 1;
+    static constexpr bool simplex = true;
+    using Point = Eigen::Matrix<double, Dim, 1>;
+
+    static Eigen::Matrix<double, npe, 1> N(const Point& xi) {
+        Eigen::Matrix<double, npe, 1> n;
+        n[0] = 1.0 - xi.sum();
+        n.template tail<Dim>() = xi;
+        return n;
+    }
+    static Eigen::Matrix<double, npe, Dim> dN(const Point&) {
+        Eigen::Matrix<double, npe, Dim> g;
+        g.row(0).setConstant(-1.0);
+        g.template bottomRows<Dim>().setIdentity();
+        return g;
+    }
+    static Point centre() { return Point::Constant(1.0 / (Dim + 1)); }
+    /// Measure of the reference simplex, 1 / Dim!.
+    static constexpr double reference_measure() { return Dim == 2 ? 0.5 : 1.0 / 6.0; }
+};
+
+template <ElementType T>
+struct ShapeOf;
+template <>
+struct ShapeOf<ElementType::Tri3> {
+    using type = P1<2>;
+};
+template <>
+struct ShapeOf<ElementType::Tet4> {
+    using type = P1<3>;
+};
+template <>
+struct ShapeOf<ElementType::Quad4> {
+    using type = Q1<2>;
+};
+template <>
+struct ShapeOf<ElementType::Hex8> {
+    using type = Q1<3>;
+};
+template <ElementType T>
+using Shape = typename ShapeOf<T>::type;
+
+template <class S>
+using Coords = Eigen::Matrix<double, S::npe, S::dim>;  ///< npe by dim corner positions
+template <class S>
+using Tensor = Eigen::Matrix<double, mandel_size(S::dim), mandel_size(S::dim)>;
+template <class S>
+using ElementMatrix = Eigen::Matrix<double, S::npe * S::dim, S::npe * S::dim>;
+template <class S>
+using BMatrix = Eigen::Matrix<double, mandel_size(S::dim), S::npe * S::dim>;
+
+/// Physical gradients (npe by dim) of the shape functions at xi and det J. Throws if det J is
+/// not positive (relative to the element size), i.e. the element is inverted or degenerate.
+template <class S>
+Eigen::Matrix<double, S::npe, S::dim> physical_gradients(const Coords<S>& X,
+                                                         const typename S::Point& xi,
+                                                         double& detJ) {
+    const Eigen::Matrix<double, S::npe, S::dim> dN = S::dN(xi);
+    const Eigen::Matrix<double, S::dim, S::dim> J = X.transpose() * dN;  // J_ik = dx_i / dxi_k
+    detJ = J.determinant();
+    const double h = (X.colwise().maxCoeff() - X.colwise().minCoeff()).maxCoeff();
+    CG_VERIFY(detJ > 1e-12 * std::pow(h, S::dim),
+              "element is {}: Jacobian determinant {:.3g} at reference point ({:.3g}) (element "
+              "size {:.3g}); check the node order",
+              detJ < 0 ? "inverted" : "degenerate", detJ, fmt::join(xi, ", "), h);
+    return dN * J.inverse();
+}
+
+/// Mandel strain-displacement matrix from the physical gradients G (npe by dim).
+template <class S>
+BMatrix<S> strain_displacement(const Eigen::Matrix<double, S::npe, S::dim>& G) {
+    BMatrix<S> B = BMatrix<S>::Zero();
+    for (int a = 0; a < S::npe; ++a) {
+        for (int d = 0; d < S::dim; ++d) B(d, S::dim * a + d) = G(a, d);
+        for (const auto& [row, i, j] : ShearPairs<S::dim>::value) {
+            B(row, S::dim * a + i) = kInvSqrt2 * G(a, j);
+            B(row, S::dim * a + j) = kInvSqrt2 * G(a, i);
+        }
+    }
+    return B;
+}
+
+/// K_e = ∫ B^T C B: one point (exact) for P1, 2^dim Gauss points for Q1.
+template <class S>
+ElementMatrix<S> stiffness(const Coords<S>& X, const Tensor<S>& C) {
+    double detJ = 0;
+    if constexpr (S::simplex) {
+        const BMatrix<S> B = strain_displacement<S>(physical_gradients<S>(X, S::centre(), detJ));
+        const ElementMatrix<S> K = (detJ * S::reference_measure()) * (B.transpose() * (C * B));
+        return 0.5 * (K + K.transpose());  // exactly symmetric despite round-off
+    } else {
+        ElementMatrix<S> K = ElementMatrix<S>::Zero();
+        const auto rule = S::stiffness_rule();
+        for (std::size_t q = 0; q < rule.points.size(); ++q) {
+            const BMatrix<S> B =
+                strain_displacement<S>(physical_gradients<S>(X, rule.points[q], detJ));
+            const BMatrix<S> CB = (rule.weights[q] * detJ) * (C * B);
+            K.noalias() += B.transpose() * CB;
+        }
+        return 0.5 * (K + K.transpose());  // exactly symmetric despite round-off
+    }
+}
+
+/// Scalar consistent mass ∫ rho N_a N_b (npe square); exact for every element of its type.
+template <class S>
+Eigen::Matrix<double, S::npe, S::npe> scalar_mass(const Coords<S>& X, double density) {
+    double detJ = 0;
+    if constexpr (S::simplex) {
+        physical_gradients<S>(X, S::centre(), detJ);
+        const double measure = detJ * S::reference_measure();
+        // ∫ N_a N_b = measure (1 + delta_ab) / ((dim+1)(dim+2)).
+        Eigen::Matrix<double, S::npe, S::npe> M;
+        M.setConstant(density * measure / ((S::dim + 1) * (S::dim + 2)));
+        M.diagonal() *= 2.0;
+        return M;
+    } else {
+        Eigen::Matrix<double, S::npe, S::npe> M = Eigen::Matrix<double, S::npe, S::npe>::Zero();
+        const auto rule = S::mass_rule();
+        for (std::size_t q = 0; q < rule.points.size(); ++q) {
+            physical_gradients<S>(X, rule.points[q], detJ);
+            const auto n = S::N(rule.points[q]);
+            M.noalias() += (density * rule.weights[q] * detJ) * (n * n.transpose());
+        }
+        return 0.5 * (M + M.transpose());  // exactly symmetric despite round-off
+    }
+}
+
+/// ∫ N_a over the element (npe values); exact for every element of its type.
+template <class S>
+Eigen::Matrix<double, S::npe, 1> load_weights(const Coords<S>& X) {
+    double detJ = 0;
+    if constexpr (S::simplex) {
+        physical_gradients<S>(X, S::centre(), detJ);
+        return Eigen::Matrix<double, S::npe, 1>::Constant(detJ * S::reference_measure() /
+                                                          S::npe);
+    } else {
+        Eigen::Matrix<double, S::npe, 1> w = Eigen::Matrix<double, S::npe, 1>::Zero();
+        const auto rule = S::load_rule();
+        for (std::size_t q = 0; q < rule.points.size(); ++q) {
+            physical_gradients<S>(X, rule.points[q], detJ);
+            w += (rule.weights[q] * detJ) * S::N(rule.points[q]);
+        }
+        return w;
+    }
+}
+
+/// Corner positions of element e of the mesh as a fixed-size matrix.
+template <class S>
+Coords<S> element_coords(const mesh::Mesh& mesh, Index e) {
+    Coords<S> X;
+    for (int a = 0; a < S::npe; ++a) X.row(a) = mesh.rest_positions.row(mesh.elements(e, a));
+    return X;
+}
+
+/// Calls f(Shape<T>{}) for the mesh's element type: the one dispatch from runtime to templates.
+template <class F>
+decltype(auto) dispatch(ElementType type, F&& f) {
+    switch (type) {
+        case ElementType::Tri3: return f(Shape<ElementType::Tri3>{});
+        case ElementType::Quad4: return f(Shape<ElementType::Quad4>{});
+        case ElementType::Tet4: return f(Shape<ElementType::Tet4>{});
+        case ElementType::Hex8: break;
+    }
+    return f(Shape<ElementType::Hex8>{});
+}
+
+}  // namespace coarsegrain::fem::kernels

@@ -1,0 +1,66 @@
+#pragma once
+/// @file Node-element incidence, node adjacency, block sparsity patterns and an OpenMP loop
+/// that carries exceptions out of the parallel region (private to src/fem).
+#include <exception>
+#include <mutex>
+#include <vector>
+
+#include "coarsegrain/common/types.hpp"
+#include "coarsegrain/mesh/mesh.hpp"
+
+namespace coarsegrain::fem::detail {
+
+/// Runs f(i) for i in [0, n) on all OpenMP threads (static schedule). The first exception thrown
+/// by any f(i) is rethrown after the loop; the remaining iterations still run.
+template <class F>
+void parallel_for(Index n, F&& f) {
+    std::exception_ptr error;
+    std::mutex mutex;
+#pragma omp parallel for schedule(static)
+    for (Index i = 0; i < n; ++i) {
+        try {
+            f(i);
+        } catch (...) {
+            const std::lock_guard<std::mutex> lock(mutex);
+            if (!error) error = std::current_exception();
+        }
+    }
+    if (error) std::rethrow_exception(error);
+}
+
+/// Node -> incident elements (CSR), each with the node's local index in that element.
+/// Elements of a node are in increasing order.
+struct NodeElements {
+    std::vector<Index> ptr;  ///< #V + 1 offsets
+    std::vector<Index> element;
+    std::vector<int> local;
+};
+NodeElements node_elements(const mesh::Mesh& mesh);
+
+/// Node adjacency (CSR): for every node the sorted list of the nodes it shares an element with,
+/// itself included.
+struct NodeGraph {
+    std::vector<Index> ptr;  ///< #V + 1 offsets
+    std::vector<Index> adj;
+};
+NodeGraph node_graph(const mesh::Mesh& mesh, const NodeElements& incidence);
+
+/// Compressed (CSC) pattern of a num_dofs square matrix with interleaved DOFs, all values zero.
+/// full = true: a dim x dim block per adjacent node pair (stiffness); false: only the diagonal
+/// of each block (consistent mass, the same scalar entry for every component). The dim columns
+/// of a node share one row pattern: column (v, j) holds per_block * deg(v) entries starting at
+/// per_block * dim * graph.ptr[v] + j * per_block * deg(v), per_block = full ? dim : 1.
+/// Written into A (resized); the values are zeroed if `zero`, else left for the caller to
+/// write.
+void block_pattern(const NodeGraph& graph, int dim, bool full, bool zero, SparseMatrix& A);
+
+/// Greedy colouring of the elements: elements that share a node get different colours.
+/// Returns the elements grouped by colour: ptr (#colours + 1 offsets) into element.
+struct Colouring {
+    std::vector<Index> ptr;
+    std::vector<Index> element;
+    Index num_colours() const { return static_cast<Index>(ptr.size()) - 1; }
+};
+Colouring colour_elements(const mesh::Mesh& mesh, const NodeElements& incidence);
+
+}  // namespace coarsegrain::fem::detail
