@@ -1,6 +1,10 @@
 #include "coarsegrain/fem/assembly.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
+#include <exception>
+#include <mutex>
 #include <optional>
 
 #include "coarsegrain/common/error.hpp"
@@ -70,7 +74,7 @@ void gather(const mesh::Mesh& mesh, Skeleton& s, ElementMatrixOf&& Ke) {
     const Index nv = mesh.num_nodes();
     const Index* outer = s.A.outerIndexPtr();
     double* values = s.A.valuePtr();
-#pragma omp parallel
+#pragma omp parallel if (nv >= detail::kMinParallel)
     {
         // position[w] = index of node w in the adjacency list of the current node.
         std::vector<Index> position(static_cast<std::size_t>(nv), 0);
@@ -99,39 +103,115 @@ void gather(const mesh::Mesh& mesh, Skeleton& s, ElementMatrixOf&& Ke) {
     }
 }
 
-/// Scatters element matrices computed on the fly, one colour at a time: elements of one colour
-/// share no node, so no two threads write the same entry.
-template <class S, bool Full, class ComputeElementMatrix>
-void scatter_coloured(const mesh::Mesh& mesh, Skeleton& s, ComputeElementMatrix&& compute) {
+/// Adds the columns of node b (local index) of element matrix K of element e.
+template <class S, bool Full, class ElementMatrixType>
+void add_columns(const mesh::Mesh& mesh, Skeleton& s, Index e, const ElementMatrixType& K, int b) {
     constexpr int dim = S::dim;
     constexpr int per_block = Full ? dim : 1;
-    const detail::Colouring colouring = detail::colour_elements(mesh, s.incidence);
+    const Index vb = mesh.elements(e, b);
+    const Index* adj = s.graph.adj.data() + s.graph.ptr[vb];
+    const Index deg = s.graph.ptr[vb + 1] - s.graph.ptr[vb];
     const Index* outer = s.A.outerIndexPtr();
     double* values = s.A.valuePtr();
-    for (Index c = 0; c < colouring.num_colours(); ++c) {
-        const Index begin = colouring.ptr[c];
-        detail::parallel_for(colouring.ptr[c + 1] - begin, [&](Index i) {
-            const Index e = colouring.element[begin + i];
-            const auto K = compute(e);
-            for (int b = 0; b < S::npe; ++b) {
-                const Index vb = mesh.elements(e, b);
-                const Index* adj = s.graph.adj.data() + s.graph.ptr[vb];
-                const Index deg = s.graph.ptr[vb + 1] - s.graph.ptr[vb];
-                for (int a = 0; a < S::npe; ++a) {
-                    const Index p = static_cast<Index>(
-                        std::lower_bound(adj, adj + deg, mesh.elements(e, a)) - adj);
-                    for (int j = 0; j < dim; ++j) {
-                        double* col = values + outer[dim * vb + j] + per_block * p;
-                        if constexpr (Full) {
-                            for (int r = 0; r < dim; ++r) col[r] += K(dim * a + r, dim * b + j);
-                        } else {
-                            col[0] += K(a, b);
-                        }
-                    }
+    for (int a = 0; a < S::npe; ++a) {
+        const Index p =
+            static_cast<Index>(std::lower_bound(adj, adj + deg, mesh.elements(e, a)) - adj);
+        for (int j = 0; j < dim; ++j) {
+            double* col = values + outer[dim * vb + j] + per_block * p;
+            if constexpr (Full) {
+                for (int r = 0; r < dim; ++r) col[r] += K(dim * a + r, dim * b + j);
+            } else {
+                col[0] += K(a, b);
+            }
+        }
+    }
+}
+
+/// Scatters element matrices computed on the fly (compute(e)), race free.
+///
+/// Default scheme, owner computes: the nodes are cut into 2 x threads contiguous ranges of
+/// about equal nonzeros; each range is one task that walks the elements in index order, computes
+/// those with a node in its range and adds only its own nodes' columns. Writes stay inside one
+/// contiguous slab of the matrix and advance with the element index, so they hit the cache;
+/// an element with nodes in several ranges is computed once per range, a thin layer when the
+/// numbering has locality (a 64^3 grid with 4 ranges recomputes ~1% of its elements).
+/// Measured on 64^3 distorted grids, 1 thread: 0.97 s against 2.73 s for 1.57M tets and
+/// 2.09 s against 2.40 s for 262k hexes compared with the coloured scatter, whose passes over
+/// the colours (31 for the tets) each sweep the whole matrix.
+///
+/// Fallback when the numbering has no locality (recomputation above 25%): greedy element
+/// colouring, one parallel pass per colour (elements of one colour share no node).
+template <class S, bool Full, class ComputeElementMatrix>
+void scatter(const mesh::Mesh& mesh, Skeleton& s, ComputeElementMatrix&& compute) {
+    const Index ne = mesh.num_elements(), nv = mesh.num_nodes();
+    const int threads = ne >= detail::kMinParallel ? omp_get_max_threads() : 1;
+    const int parts = threads > 1 ? 2 * threads : 1;
+    // first[t] = first node of range t, balanced by the adjacency count (nonzeros per column).
+    std::vector<Index> first(static_cast<std::size_t>(parts) + 1, nv);
+    first[0] = 0;
+    for (int t = 1; t < parts; ++t) {
+        const Index target = static_cast<Index>(
+            static_cast<long long>(s.graph.ptr[nv]) * t / parts);
+        first[t] = static_cast<Index>(
+            std::lower_bound(s.graph.ptr.begin(), s.graph.ptr.end() - 1, target) -
+            s.graph.ptr.begin());
+    }
+    const auto part_of = [&](Index v) {
+        return static_cast<int>(std::upper_bound(first.begin(), first.end(), v) - first.begin()) -
+               1;
+    };
+    // Elements computed in total by the owner scheme: one per (element, range touched).
+    long long work = 0;
+    if (parts > 1) {
+#pragma omp parallel for schedule(static) reduction(+ : work)
+        for (Index e = 0; e < ne; ++e) {
+            int lo = parts, hi = -1;
+            for (int a = 0; a < S::npe; ++a) {
+                const int t = part_of(mesh.elements(e, a));
+                lo = std::min(lo, t);
+                hi = std::max(hi, t);
+            }
+            // Ranges are contiguous in node index, so an element spans at most hi - lo + 1.
+            work += hi - lo + 1;
+        }
+    }
+    if (work > 1.25 * static_cast<double>(ne)) {
+        const detail::Colouring colouring = detail::colour_elements(mesh, s.incidence);
+        for (Index c = 0; c < colouring.num_colours(); ++c) {
+            const Index begin = colouring.ptr[c];
+            detail::parallel_for(colouring.ptr[c + 1] - begin, [&](Index i) {
+                const Index e = colouring.element[begin + i];
+                const auto K = detail::for_element(e, [&] { return compute(e); });
+                for (int b = 0; b < S::npe; ++b) add_columns<S, Full>(mesh, s, e, K, b);
+            });
+        }
+        return;
+    }
+    std::exception_ptr error;
+    std::mutex mutex;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (int t = 0; t < parts; ++t) {
+        try {
+            const Index lo = first[t], hi = first[t + 1];
+            for (Index e = 0; e < ne; ++e) {
+                bool mine = false;
+                for (int a = 0; a < S::npe && !mine; ++a) {
+                    const Index v = mesh.elements(e, a);
+                    mine = v >= lo && v < hi;
+                }
+                if (!mine) continue;
+                const auto K = detail::for_element(e, [&] { return compute(e); });
+                for (int b = 0; b < S::npe; ++b) {
+                    const Index v = mesh.elements(e, b);
+                    if (v >= lo && v < hi) add_columns<S, Full>(mesh, s, e, K, b);
                 }
             }
-        });
+        } catch (...) {
+            const std::lock_guard<std::mutex> lock(mutex);
+            if (!error) error = std::current_exception();
+        }
     }
+    if (error) std::rethrow_exception(error);
 }
 
 }  // namespace
@@ -156,7 +236,7 @@ SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMat
                 return K;
             }
         }
-        scatter_coloured<S, true>(mesh, s, [&](Index e) {
+        scatter<S, true>(mesh, s, [&](Index e) {
             return kernels::stiffness<S>(kernels::element_coords<S>(mesh, e),
                                          mats.of(e).C.template topLeftCorner<n, n>());
         });
@@ -181,12 +261,13 @@ SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterial
                 if (congruent_grid(mesh)) cell = kernels::load_weights<S>(grid_cell<S>(*mesh.grid));
             detail::parallel_for(mesh.num_elements(), [&](Index e) {
                 w[e] = mats.of(e).density *
-                       (cell ? *cell
-                             : kernels::load_weights<S>(kernels::element_coords<S>(mesh, e)));
+                       (cell ? *cell : detail::for_element(e, [&] {
+                           return kernels::load_weights<S>(kernels::element_coords<S>(mesh, e));
+                       }));
             });
             const detail::NodeElements inc = detail::node_elements(mesh);
             Vector diag(S::dim * nv);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nv >= detail::kMinParallel)
             for (Index v = 0; v < nv; ++v) {
                 double m = 0;
                 for (Index k = inc.ptr[v]; k < inc.ptr[v + 1]; ++k)
@@ -216,7 +297,7 @@ SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterial
                 return M;
             }
         }
-        scatter_coloured<S, false>(mesh, s, [&](Index e) {
+        scatter<S, false>(mesh, s, [&](Index e) {
             return kernels::scalar_mass<S>(kernels::element_coords<S>(mesh, e),
                                            mats.of(e).density);
         });

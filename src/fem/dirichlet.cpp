@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "coarsegrain/common/error.hpp"
+#include "mesh_graph.hpp"
 
 namespace coarsegrain::fem {
 
@@ -99,7 +100,7 @@ ReducedSystem reduce(const SparseMatrix& K, const Vector& f, const Dirichlet& bc
     sys.K.resize(nf, nf);
     Index* rout = sys.K.outerIndexPtr();
     rout[0] = 0;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nf >= detail::kMinParallel)
     for (Index c = 0; c < nf; ++c) {
         const Index j = sys.free_dofs[c];
         Index count = 0;
@@ -110,7 +111,7 @@ ReducedSystem reduce(const SparseMatrix& K, const Vector& f, const Dirichlet& bc
     sys.K.resizeNonZeros(rout[nf]);
     Index* rin = sys.K.innerIndexPtr();
     double* rval = sys.K.valuePtr();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nf >= detail::kMinParallel)
     for (Index c = 0; c < nf; ++c) {
         const Index j = sys.free_dofs[c];
         Index k = rout[c];

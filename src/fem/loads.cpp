@@ -22,8 +22,9 @@ Vector gravity_load(const mesh::Mesh& mesh, const material::ElementMaterials& ma
         // rho ∫ N_a per element (parallel), then the per-node sums (serial, O(#E npe)).
         std::vector<Weights> w(static_cast<std::size_t>(mesh.num_elements()));
         detail::parallel_for(mesh.num_elements(), [&](Index e) {
-            w[e] = mats.of(e).density *
-                   kernels::load_weights<S>(kernels::element_coords<S>(mesh, e));
+            w[e] = mats.of(e).density * detail::for_element(e, [&] {
+                       return kernels::load_weights<S>(kernels::element_coords<S>(mesh, e));
+                   });
         });
         Eigen::VectorXd node_mass = Eigen::VectorXd::Zero(mesh.num_nodes());
         for (Index e = 0; e < mesh.num_elements(); ++e)

@@ -48,7 +48,7 @@ NodeGraph node_graph(const mesh::Mesh& mesh, const NodeElements& inc) {
                 }
             }
     };
-#pragma omp parallel
+#pragma omp parallel if (nv >= kMinParallel)
     {
         std::vector<Index> stamp(static_cast<std::size_t>(nv), -1);
 #pragma omp for schedule(static)
@@ -60,7 +60,7 @@ NodeGraph node_graph(const mesh::Mesh& mesh, const NodeElements& inc) {
     }
     for (Index v = 0; v < nv; ++v) g.ptr[v + 1] += g.ptr[v];
     g.adj.resize(static_cast<std::size_t>(g.ptr[nv]));
-#pragma omp parallel
+#pragma omp parallel if (nv >= kMinParallel)
     {
         std::vector<Index> stamp(static_cast<std::size_t>(nv), -1);
 #pragma omp for schedule(static)
@@ -84,7 +84,7 @@ void block_pattern(const NodeGraph& g, int dim, bool full, bool zero, SparseMatr
     Index* outer = A.outerIndexPtr();
     Index* inner = A.innerIndexPtr();
     double* values = A.valuePtr();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (nv >= kMinParallel)
     for (Index v = 0; v < nv; ++v) {
         const Index deg = g.ptr[v + 1] - g.ptr[v];
         for (int j = 0; j < dim; ++j) {

@@ -5,10 +5,15 @@
 #include <mutex>
 #include <vector>
 
+#include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/types.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 
 namespace coarsegrain::fem::detail {
+
+/// Loops shorter than this run on one thread: a parallel region costs a barrier, which is
+/// expensive on a busy machine (and small meshes gain nothing from threads).
+inline constexpr Index kMinParallel = 512;
 
 /// Runs f(i) for i in [0, n) on all OpenMP threads (static schedule). The first exception thrown
 /// by any f(i) is rethrown after the loop; the remaining iterations still run.
@@ -16,7 +21,7 @@ template <class F>
 void parallel_for(Index n, F&& f) {
     std::exception_ptr error;
     std::mutex mutex;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kMinParallel)
     for (Index i = 0; i < n; ++i) {
         try {
             f(i);
@@ -26,6 +31,17 @@ void parallel_for(Index n, F&& f) {
         }
     }
     if (error) std::rethrow_exception(error);
+}
+
+/// Runs f() for element e; an Error it throws is rethrown with "element e: " in front, so a
+/// kernel's message (e.g. an inverted element) names the element.
+template <class F>
+decltype(auto) for_element(Index e, F&& f) {
+    try {
+        return f();
+    } catch (const Error& error) {
+        throw Error(fmt::format("element {}: {}", e, error.what()));
+    }
 }
 
 /// Node -> incident elements (CSR), each with the node's local index in that element.

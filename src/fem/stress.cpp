@@ -45,10 +45,11 @@ ElementStress element_stress(const mesh::Mesh& mesh, const material::ElementMate
         using S = decltype(shape);
         constexpr int nm = mandel_size(S::dim);
         detail::parallel_for(mesh.num_elements(), [&](Index e) {
-            double detJ = 0;
-            const kernels::BMatrix<S> B = kernels::strain_displacement<S>(
-                kernels::physical_gradients<S>(kernels::element_coords<S>(mesh, e), S::centre(),
-                                               detJ));
+            const kernels::BMatrix<S> B = detail::for_element(e, [&] {
+                double detJ = 0;
+                return kernels::strain_displacement<S>(kernels::physical_gradients<S>(
+                    kernels::element_coords<S>(mesh, e), S::centre(), detJ));
+            });
             Eigen::Matrix<double, S::npe * S::dim, 1> ue;
             for (int a = 0; a < S::npe; ++a)
                 ue.template segment<S::dim>(S::dim * a) =

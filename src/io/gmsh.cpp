@@ -71,16 +71,20 @@ const GmshType* gmsh_type(std::int64_t number) {
 
 int gmsh_number(ElementType type) {
     switch (type) {
-        case ElementType::Tri3: return 2;
-        case ElementType::Quad4: return 3;
-        case ElementType::Tet4: return 4;
-        case ElementType::Hex8: return 5;
+        case ElementType::Tri3:
+            return 2;
+        case ElementType::Quad4:
+            return 3;
+        case ElementType::Tet4:
+            return 4;
+        case ElementType::Hex8:
+            return 5;
     }
     return 0;
 }
 
 class GmshReader {
-public:
+  public:
     explicit GmshReader(const std::string& file) : m_in(file, '\0') {}
 
     mesh::Mesh read() {
@@ -88,8 +92,7 @@ public:
             m_in.fail_at(1, "the file is empty; expected a Gmsh mesh starting with $MeshFormat");
         m_in.require_line("$MeshFormat");
         if (m_in.field(0) != "$MeshFormat")
-            m_in.fail("expected $MeshFormat on the first line, found {}",
-                      quoted(m_in.line_text()));
+            m_in.fail("expected $MeshFormat on the first line, found {}", quoted(m_in.line_text()));
         read_format();
         while (m_in.next_line()) {
             const std::string_view name = m_in.field(0);
@@ -119,15 +122,17 @@ public:
         }
         const int end = m_in.line();
         if (!m_have_nodes)
-            m_in.fail_at(end, "end of file without a $Nodes section (a mesh needs $Nodes and "
-                              "$Elements)");
+            m_in.fail_at(end,
+                         "end of file without a $Nodes section (a mesh needs $Nodes and "
+                         "$Elements)");
         if (!m_have_elements)
-            m_in.fail_at(end, "end of file without an $Elements section (a mesh needs $Nodes "
-                              "and $Elements)");
+            m_in.fail_at(end,
+                         "end of file without an $Elements section (a mesh needs $Nodes "
+                         "and $Elements)");
         return detail::build_mesh(m_raw, m_in, end);
     }
 
-private:
+  private:
     void read_format() {
         m_in.require_line("the format line 'version file-type data-size'");
         if (m_in.num_fields() >= 2 && m_in.field(1) == "1")
@@ -140,9 +145,10 @@ private:
         else if (version == "4.1")
             m_version = 4;
         else
-            m_in.fail("Gmsh format version {} is not supported; save the mesh as version 4.1 or "
-                      "2.2 (ASCII)",
-                      quoted(version));
+            m_in.fail(
+                "Gmsh format version {} is not supported; save the mesh as version 4.1 or "
+                "2.2 (ASCII)",
+                quoted(version));
         if (m_in.field(1) != "0")
             m_in.fail("expected file-type 0 (ASCII), found {}", quoted(m_in.field(1)));
         expect_end("$EndMeshFormat", "the format line");
@@ -152,8 +158,8 @@ private:
     /// fewer records than its count announced.
     void record(const char* kind, std::int64_t i, std::int64_t n) {
         if (!m_in.next_line())
-            m_in.fail("unexpected end of file: expected {} {} of {} (is the file truncated?)",
-                      kind, i + 1, n);
+            m_in.fail("unexpected end of file: expected {} {} of {} (is the file truncated?)", kind,
+                      i + 1, n);
         if (m_in.field(0).starts_with('$'))
             m_in.fail("expected {} {} of {}, found {}: the section holds fewer than announced",
                       kind, i + 1, n, quoted(m_in.line_text()));
@@ -168,9 +174,10 @@ private:
     void expect_end(const std::string& end, const std::string& after) {
         m_in.require_line(end);
         if (m_in.field(0) != end || m_in.num_fields() != 1)
-            m_in.fail("expected {} after {}, found {} (does the section hold more than its "
-                      "count announces?)",
-                      end, after, quoted(m_in.line_text()));
+            m_in.fail(
+                "expected {} after {}, found {} (does the section hold more than its "
+                "count announces?)",
+                end, after, quoted(m_in.line_text()));
     }
 
     void skip_section(std::string_view name) {
@@ -212,9 +219,10 @@ private:
             const std::int64_t number = m_in.integer(m_in.field(1), "an element type");
             const GmshType* type = gmsh_type(number);
             if (!type)
-                m_in.fail("unknown Gmsh element type {} (coarsegrain reads 2 triangle, 3 quad, "
-                          "4 tetrahedron, 5 hexahedron)",
-                          number);
+                m_in.fail(
+                    "unknown Gmsh element type {} (coarsegrain reads 2 triangle, 3 quad, "
+                    "4 tetrahedron, 5 hexahedron)",
+                    number);
             const Index num_tags = m_in.count(m_in.field(2), "the number of tags");
             m_in.expect_fields(3 + static_cast<std::size_t>(num_tags) + type->nodes,
                                "an element line 'number type #tags tags... nodes...'");
@@ -331,14 +339,16 @@ private:
             int dim = 0;
             std::int64_t tag = 0, number = 0;
             Index count = 0;
-            block_header("an element block header 'entityDim entityTag elementType "
-                         "numElementsInBlock'",
-                         dim, tag, number, count);
+            block_header(
+                "an element block header 'entityDim entityTag elementType "
+                "numElementsInBlock'",
+                dim, tag, number, count);
             const GmshType* type = gmsh_type(number);
             if (!type)
-                m_in.fail("unknown Gmsh element type {} (coarsegrain reads 2 triangle, 3 quad, "
-                          "4 tetrahedron, 5 hexahedron)",
-                          number);
+                m_in.fail(
+                    "unknown Gmsh element type {} (coarsegrain reads 2 triangle, 3 quad, "
+                    "4 tetrahedron, 5 hexahedron)",
+                    number);
             if (count > n - read)
                 m_in.fail("the block holds {} elements, but only {} of the {} announced remain",
                           count, n - read, n);
@@ -389,8 +399,7 @@ std::vector<Index> distinct_materials(const mesh::Mesh& mesh) {
 }
 
 Index entity_of(const std::vector<Index>& ids, Index material) {
-    return static_cast<Index>(std::lower_bound(ids.begin(), ids.end(), material) - ids.begin()) +
-           1;
+    return static_cast<Index>(std::lower_bound(ids.begin(), ids.end(), material) - ids.begin()) + 1;
 }
 
 void write_nodes_and_coordinates(detail::BufferedWriter& w, const mesh::Mesh& mesh, bool tags) {
@@ -461,8 +470,7 @@ void write_gmsh4(std::ostream& out, const mesh::Mesh& mesh) {
     // Elements in their order: one block per run of equal material ids.
     std::vector<std::pair<Index, Index>> runs;  // (first element, length)
     for (Index e = 0; e < mesh.num_elements(); ++e) {
-        if (e == 0 || mesh.material_ids[e] != mesh.material_ids[e - 1])
-            runs.emplace_back(e, 0);
+        if (e == 0 || mesh.material_ids[e] != mesh.material_ids[e - 1]) runs.emplace_back(e, 0);
         ++runs.back().second;
     }
     w.print("$EndNodes\n$Elements\n{} {} 1 {}\n", runs.size(), mesh.num_elements(),

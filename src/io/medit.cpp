@@ -33,34 +33,41 @@ bool is_keyword(std::string_view token) {
 /// Section keywords of the Medit format (libMeshb's list, the ones seen in practice): inside a
 /// section, one of these means the section ended early; any other word is a bad number.
 bool is_section_keyword(std::string_view token) {
+    // clang-format off
     static const char* const kKeywords[] = {
         "MeshVersionFormatted", "Dimension", "Vertices", "Edges", "Triangles", "Quadrilaterals",
         "Tetrahedra", "Prisms", "Hexahedra", "Pyramids", "Corners", "Ridges", "RequiredVertices",
         "RequiredEdges", "RequiredTriangles", "RequiredQuadrilaterals", "Normals", "Tangents",
         "NormalAtVertices", "NormalAtTriangleVertices", "TangentAtEdges", "TangentAtVertices",
         "Identifier", "Geometry", "End"};
+    // clang-format on
     return std::any_of(std::begin(kKeywords), std::end(kKeywords),
                        [&](const char* k) { return iequals(token, k); });
 }
 
 const char* medit_keyword(ElementType type) {
     switch (type) {
-        case ElementType::Tri3: return "Triangles";
-        case ElementType::Quad4: return "Quadrilaterals";
-        case ElementType::Tet4: return "Tetrahedra";
-        case ElementType::Hex8: return "Hexahedra";
+        case ElementType::Tri3:
+            return "Triangles";
+        case ElementType::Quad4:
+            return "Quadrilaterals";
+        case ElementType::Tet4:
+            return "Tetrahedra";
+        case ElementType::Hex8:
+            return "Hexahedra";
     }
     return "?";
 }
 
 class MeditReader {
-public:
+  public:
     explicit MeditReader(const std::string& file) : m_in(file, '#') {}
 
     mesh::Mesh read() {
         if (m_in.empty())
-            m_in.fail_at(1, "the file is empty; expected a Medit mesh starting with "
-                            "MeshVersionFormatted");
+            m_in.fail_at(1,
+                         "the file is empty; expected a Medit mesh starting with "
+                         "MeshVersionFormatted");
         const std::string_view first = m_in.require_token("MeshVersionFormatted");
         if (!iequals(first, "MeshVersionFormatted"))
             m_in.fail("expected MeshVersionFormatted at the start, found {}", quoted(first));
@@ -100,7 +107,7 @@ public:
         return detail::build_mesh(m_raw, m_in, end);
     }
 
-private:
+  private:
     bool next_keyword(std::string_view& keyword) {
         if (m_pending) {
             keyword = *m_pending;
@@ -109,9 +116,10 @@ private:
         }
         if (!m_in.next_token(keyword)) return false;
         if (!is_keyword(keyword))
-            m_in.fail("expected a keyword such as Vertices or Tetrahedra, found {} (does a "
-                      "section hold more entries than its count announces?)",
-                      quoted(keyword));
+            m_in.fail(
+                "expected a keyword such as Vertices or Tetrahedra, found {} (does a "
+                "section hold more entries than its count announces?)",
+                quoted(keyword));
         return true;
     }
 
@@ -129,9 +137,10 @@ private:
     std::string_view entry_token(const char* section, Index i, Index n) {
         const std::string_view token = m_in.require_token(section);
         if (is_section_keyword(token))
-            m_in.fail("expected entry {} of {} of {}, found {}: the section holds fewer entries "
-                      "than announced",
-                      i + 1, n, section, quoted(token));
+            m_in.fail(
+                "expected entry {} of {} of {}, found {}: the section holds fewer entries "
+                "than announced",
+                i + 1, n, section, quoted(token));
         return token;
     }
 
@@ -139,8 +148,8 @@ private:
         if (m_dim == 0) m_in.fail("Vertices before Dimension; the dimension must come first");
         if (m_have_vertices) m_in.fail("a second Vertices section");
         m_have_vertices = true;
-        const Index n = m_in.count(m_in.require_token("the number of vertices"),
-                                   "the number of vertices");
+        const Index n =
+            m_in.count(m_in.require_token("the number of vertices"), "the number of vertices");
         const std::size_t hint = detail::reserve_hint(n, m_in.bytes_left(), 8);
         m_raw.xyz.reserve(3 * hint);
         m_raw.node_line.reserve(hint);
@@ -156,8 +165,8 @@ private:
 
     void read_elements(ElementType type) {
         const char* section = medit_keyword(type);
-        const Index n = m_in.count(m_in.require_token("the number of elements"),
-                                   "the number of elements");
+        const Index n =
+            m_in.count(m_in.require_token("the number of elements"), "the number of elements");
         const int npe = mesh::nodes_per_element(type);
         std::int64_t nodes[8];
         for (Index e = 0; e < n; ++e) {

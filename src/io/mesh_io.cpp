@@ -21,13 +21,13 @@ mesh::Mesh read_mesh(const std::string& file) {
     if (ext == ".node" || ext == ".ele") return read_tetgen(file);
     if (ext == ".mesh") return read_medit(file);
     if (ext == ".vtu") return read_vtu(file).first;
-    CG_VERIFY_AS(MeshReadError, ext != ".meshb",
-                 "{}: binary Medit files (.meshb) are not supported; save as ASCII .mesh", file);
-    CG_VERIFY_AS(MeshReadError, false,
-                 "{}: unknown mesh file extension '{}'; expected .msh (Gmsh), .node/.ele "
-                 "(TetGen), .mesh (Medit) or .vtu",
-                 file, ext);
-    return {};
+    if (ext == ".meshb")
+        throw MeshReadError(fmt::format(
+            "{}: binary Medit files (.meshb) are not supported; save as ASCII .mesh", file));
+    throw MeshReadError(
+        fmt::format("{}: unknown mesh file extension '{}'; expected .msh (Gmsh), "
+                    ".node/.ele (TetGen), .mesh (Medit) or .vtu",
+                    file, ext));
 }
 
 void write_mesh(const std::string& file, const mesh::Mesh& mesh) {
@@ -36,10 +36,10 @@ void write_mesh(const std::string& file, const mesh::Mesh& mesh) {
     if (ext == ".node" || ext == ".ele") return write_tetgen(file, mesh);
     if (ext == ".mesh") return write_medit(file, mesh);
     if (ext == ".vtu") return write_vtu(file, mesh, {});
-    CG_VERIFY(false,
-              "cannot write {}: unknown mesh file extension '{}'; expected .msh, .node/.ele, "
-              ".mesh or .vtu",
-              file, ext);
+    throw Error(
+        fmt::format("cannot write {}: unknown mesh file extension '{}'; expected .msh, "
+                    ".node/.ele, .mesh or .vtu",
+                    file, ext));
 }
 
 }  // namespace coarsegrain::io

@@ -35,7 +35,7 @@ namespace {
 /// Maps the file's node numbers to positions in RawMesh: a dense table when the numbers are
 /// not too sparse, a sorted table otherwise (never an allocation sized by the largest number).
 class NodeLookup {
-public:
+  public:
     NodeLookup(const RawMesh& raw, const TextReader& reader)
         : m_count(static_cast<Index>(raw.node_line.size())), m_base(raw.tag_base) {
         if (raw.tags.empty()) return;
@@ -46,8 +46,8 @@ public:
         if (span <= 4 * static_cast<std::uint64_t>(m_count) + 1024) {
             m_dense.assign(span + 1, -1);
             for (Index i = 0; i < m_count; ++i) {
-                Index& slot = m_dense[static_cast<std::size_t>(static_cast<std::uint64_t>(raw.tags[i]) -
-                                                             static_cast<std::uint64_t>(m_base))];
+                Index& slot = m_dense[static_cast<std::size_t>(
+                    static_cast<std::uint64_t>(raw.tags[i]) - static_cast<std::uint64_t>(m_base))];
                 if (slot >= 0) duplicate(raw, reader, slot, i);
                 slot = i;
             }
@@ -72,7 +72,8 @@ public:
         }
         if (!m_dense.empty()) {
             if (tag < m_base) return -1;
-            const auto offset = static_cast<std::uint64_t>(tag) - static_cast<std::uint64_t>(m_base);
+            const auto offset =
+                static_cast<std::uint64_t>(tag) - static_cast<std::uint64_t>(m_base);
             return offset < m_dense.size() ? m_dense[offset] : -1;
         }
         const auto it = std::lower_bound(m_sorted.begin(), m_sorted.end(),
@@ -80,7 +81,7 @@ public:
         return (it != m_sorted.end() && it->first == tag) ? it->second : -1;
     }
 
-private:
+  private:
     [[noreturn]] static void duplicate(const RawMesh& raw, const TextReader& reader, Index first,
                                        Index second) {
         reader.fail_at(raw.node_line[second],
@@ -97,10 +98,14 @@ private:
 
 std::string plural(ElementType type) {
     switch (type) {
-        case ElementType::Tri3: return "triangles";
-        case ElementType::Quad4: return "quads";
-        case ElementType::Tet4: return "tetrahedra";
-        case ElementType::Hex8: return "hexahedra";
+        case ElementType::Tri3:
+            return "triangles";
+        case ElementType::Quad4:
+            return "quads";
+        case ElementType::Tet4:
+            return "tetrahedra";
+        case ElementType::Hex8:
+            return "hexahedra";
     }
     return "?";
 }
@@ -112,7 +117,8 @@ mesh::Mesh build_mesh(const RawMesh& raw, const TextReader& reader, int end_line
                                       ElementType::Hex8};
     int dim = -1;
     for (ElementType t : kTypes)
-        if (!raw.blocks[static_cast<int>(t)].line.empty()) dim = std::max(dim, mesh::element_dim(t));
+        if (!raw.blocks[static_cast<int>(t)].line.empty())
+            dim = std::max(dim, mesh::element_dim(t));
     if (dim < 0 && raw.other_dim < 0)
         reader.fail_at(end_line, "the file has no triangles, quads, tetrahedra or hexahedra");
     if (raw.other_dim >= dim)
@@ -129,11 +135,11 @@ mesh::Mesh build_mesh(const RawMesh& raw, const TextReader& reader, int end_line
         const RawElements& a = raw.blocks[static_cast<int>(present[0])];
         const RawElements& b = raw.blocks[static_cast<int>(present[1])];
         const bool a_first = a.line.front() < b.line.front();
-        reader.fail_at(a_first ? b.line.front() : a.line.front(),
-                       fmt::format("the file mixes {} (first on line {}) and {} (first on line "
-                                   "{}); a mesh must have a single element type",
-                                   plural(present[0]), a.line.front(), plural(present[1]),
-                                   b.line.front()));
+        reader.fail_at(
+            a_first ? b.line.front() : a.line.front(),
+            fmt::format("the file mixes {} (first on line {}) and {} (first on line "
+                        "{}); a mesh must have a single element type",
+                        plural(present[0]), a.line.front(), plural(present[1]), b.line.front()));
     }
     const ElementType type = present.front();
     const RawElements& block = raw.blocks[static_cast<int>(type)];
@@ -167,11 +173,11 @@ mesh::Mesh build_mesh(const RawMesh& raw, const TextReader& reader, int end_line
         if (new_index[p] < 0) continue;
         const double* x = &raw.xyz[3 * static_cast<std::size_t>(p)];
         if (dim == 2 && x[2] != 0.0)
-            reader.fail_at(raw.node_line[p],
-                           fmt::format("node {} has z = {}, but a mesh of {} must lie in the "
-                                       "plane z = 0",
-                                       raw.tags.empty() ? raw.tag_base + p : raw.tags[p], x[2],
-                                       plural(type)));
+            reader.fail_at(
+                raw.node_line[p],
+                fmt::format("node {} has z = {}, but a mesh of {} must lie in the "
+                            "plane z = 0",
+                            raw.tags.empty() ? raw.tag_base + p : raw.tags[p], x[2], plural(type)));
         for (int d = 0; d < dim; ++d) result.rest_positions(new_index[p], d) = x[d];
     }
     result.elements.resize(num_elements, npe);
@@ -196,9 +202,9 @@ void validate_read_mesh(const mesh::Mesh& mesh, const std::string& file,
         int line = fallback_line;
         // Find the first element that fails on its own: its line is the one to report.
         const int npe = mesh::nodes_per_element(mesh.type);
-        const bool per_element = mesh.elements.cols() == npe &&
-                                 mesh.rest_positions.cols() == mesh.dim() &&
-                                 element_line.size() == static_cast<std::size_t>(mesh.num_elements());
+        const bool per_element =
+            mesh.elements.cols() == npe && mesh.rest_positions.cols() == mesh.dim() &&
+            element_line.size() == static_cast<std::size_t>(mesh.num_elements());
         for (Index e = 0; per_element && e < mesh.num_elements(); ++e) {
             mesh::Mesh single;
             single.type = mesh.type;

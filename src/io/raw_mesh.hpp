@@ -22,10 +22,10 @@ struct RawElements {
 
 /// Nodes and elements as read from a file.
 struct RawMesh {
-    std::vector<double> xyz;          ///< 3 coordinates per node (z = 0 for 2D files)
-    std::vector<std::int64_t> tags;   ///< node number per node; empty: tag_base + position
-    std::int64_t tag_base = 0;        ///< first node number when tags is empty (0 or 1)
-    std::vector<int> node_line;       ///< line of the file per node
+    std::vector<double> xyz;            ///< 3 coordinates per node (z = 0 for 2D files)
+    std::vector<std::int64_t> tags;     ///< node number per node; empty: tag_base + position
+    std::int64_t tag_base = 0;          ///< first node number when tags is empty (0 or 1)
+    std::vector<int> node_line;         ///< line of the file per node
     std::array<RawElements, 4> blocks;  ///< indexed by mesh::ElementType
 
     /// Highest dimension among elements of types coarsegrain does not read (second-order,

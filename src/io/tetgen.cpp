@@ -22,7 +22,8 @@ using mesh::ElementType;
 std::string strip_extension(const std::string& path) {
     for (const char* ext : {".node", ".ele"}) {
         const std::string e(ext);
-        if (path.size() > e.size() && path.ends_with(e)) return path.substr(0, path.size() - e.size());
+        if (path.size() > e.size() && path.ends_with(e))
+            return path.substr(0, path.size() - e.size());
     }
     return path;
 }
@@ -43,9 +44,10 @@ std::int64_t record_number(const TextReader& in, Index i, std::int64_t base, con
 
 void expect_end_of_file(TextReader& in, Index n, const char* kind) {
     if (in.next_line())
-        in.fail("expected the end of the file after {} {}, found {} (does the file hold more than "
-                "its header announces?)",
-                n, kind, quoted(in.line_text()));
+        in.fail(
+            "expected the end of the file after {} {}, found {} (does the file hold more than "
+            "its header announces?)",
+            n, kind, quoted(in.line_text()));
 }
 
 }  // namespace
@@ -55,8 +57,9 @@ mesh::Mesh read_tetgen(const std::string& base_in) {
     const std::string node_file = base + ".node", ele_file = base + ".ele";
     TextReader nodes(node_file, '#');
     if (nodes.empty())
-        nodes.fail_at(1, "the file is empty; expected the header '#nodes dimension #attributes "
-                         "#boundary-markers'");
+        nodes.fail_at(1,
+                      "the file is empty; expected the header '#nodes dimension #attributes "
+                      "#boundary-markers'");
     std::error_code ec;
     if (!std::filesystem::exists(ele_file, ec))
         nodes.fail_at(1, fmt::format("there is no element file {} beside this node file (a "
@@ -67,7 +70,8 @@ mesh::Mesh read_tetgen(const std::string& base_in) {
     nodes.require_line(header);
     if (nodes.num_fields() > 4) nodes.expect_fields(4, header);
     const Index n = nodes.count(nodes.field(0), "the number of nodes");
-    const std::int64_t dim = nodes.num_fields() > 1 ? nodes.integer(nodes.field(1), "the dimension") : 3;
+    const std::int64_t dim =
+        nodes.num_fields() > 1 ? nodes.integer(nodes.field(1), "the dimension") : 3;
     if (dim != 2 && dim != 3) nodes.fail("expected dimension 2 or 3, found {}", dim);
     const Index num_attributes =
         nodes.num_fields() > 2 ? nodes.count(nodes.field(2), "the number of attributes") : 0;
@@ -75,8 +79,9 @@ mesh::Mesh read_tetgen(const std::string& base_in) {
         nodes.num_fields() > 3 ? nodes.count(nodes.field(3), "the number of boundary markers") : 0;
     if (num_markers > 1) nodes.fail("expected 0 or 1 boundary markers, found {}", num_markers);
     if (n == 0)
-        nodes.fail("the file has no nodes (TetGen writes 0 when the nodes are in a .poly or "
-                   ".smesh file, which coarsegrain does not read)");
+        nodes.fail(
+            "the file has no nodes (TetGen writes 0 when the nodes are in a .poly or "
+            ".smesh file, which coarsegrain does not read)");
 
     detail::RawMesh raw;
     const std::size_t hint = detail::reserve_hint(n, nodes.bytes_left(), 6);
@@ -102,8 +107,9 @@ mesh::Mesh read_tetgen(const std::string& base_in) {
 
     TextReader elements(ele_file, '#');
     if (elements.empty())
-        elements.fail_at(1, "the file is empty; expected the header '#elements "
-                            "nodes-per-element #attributes'");
+        elements.fail_at(1,
+                         "the file is empty; expected the header '#elements "
+                         "nodes-per-element #attributes'");
     const char* ele_header = "the header '#elements nodes-per-element #attributes'";
     elements.require_line(ele_header);
     if (elements.num_fields() < 2 || elements.num_fields() > 3)
@@ -115,9 +121,10 @@ mesh::Mesh read_tetgen(const std::string& base_in) {
                                   : 0;
     const int expected_npe = dim == 3 ? 4 : 3;
     if (npe == 2 * expected_npe + (dim == 3 ? 2 : 0))
-        elements.fail("second-order elements ({} nodes) are not supported; mesh with linear "
-                      "elements",
-                      npe);
+        elements.fail(
+            "second-order elements ({} nodes) are not supported; mesh with linear "
+            "elements",
+            npe);
     if (npe != expected_npe)
         elements.fail("expected {} nodes per element for the {}D nodes of {}, found {}",
                       expected_npe, dim, node_file, npe);
@@ -129,9 +136,10 @@ mesh::Mesh read_tetgen(const std::string& base_in) {
     std::int64_t corners[4];
     for (Index e = 0; e < m; ++e) {
         if (!elements.next_line())
-            elements.fail("unexpected end of file: expected element {} of {} (is the file "
-                          "truncated?)",
-                          e + 1, m);
+            elements.fail(
+                "unexpected end of file: expected element {} of {} (is the file "
+                "truncated?)",
+                e + 1, m);
         elements.expect_fields(ele_fields, "an element line 'number nodes... [attributes]'");
         const std::int64_t number = record_number(elements, e, element_base, "element number");
         if (e == 0) element_base = number;

@@ -1,7 +1,7 @@
 #include "text_reader.hpp"
 
-#include <cerrno>
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -23,8 +23,8 @@ std::string read_file_bytes(const std::string& file) {
     std::error_code ec;
     const fs::file_status status = fs::status(file, ec);
     CG_VERIFY_AS(MeshReadError, fs::exists(status), "{}: cannot read: no such file", file);
-    CG_VERIFY_AS(MeshReadError, fs::is_regular_file(status),
-                 "{}: cannot read: not a regular file", file);
+    CG_VERIFY_AS(MeshReadError, fs::is_regular_file(status), "{}: cannot read: not a regular file",
+                 file);
     std::ifstream in(file, std::ios::binary);
     CG_VERIFY_AS(MeshReadError, in.good(), "{}: cannot open: {}", file, std::strerror(errno));
     std::ostringstream buffer;
@@ -53,9 +53,12 @@ TextReader::TextReader(std::string file, char comment)
 bool TextReader::empty() const {
     bool in_comment = false;
     for (char c : m_data) {
-        if (c == '\n') in_comment = false;
-        else if (m_comment != '\0' && c == m_comment) in_comment = true;
-        else if (!in_comment && !is_space(c)) return false;
+        if (c == '\n')
+            in_comment = false;
+        else if (m_comment != '\0' && c == m_comment)
+            in_comment = true;
+        else if (!in_comment && !is_space(c))
+            return false;
     }
     return true;
 }

@@ -25,7 +25,7 @@ std::string quoted(std::string_view text);
 /// Line mode (next_line / fields) and token mode (next_token, tokens across lines) can be
 /// mixed: token mode continues after the last token handed out on the current line.
 class TextReader {
-public:
+  public:
     /// @param comment character that starts a comment running to the end of the line, or '\0'
     TextReader(std::string file, char comment);
 
@@ -73,7 +73,7 @@ public:
     /// @throws MeshReadError "FILE:LINE: message" for another line
     [[noreturn]] void fail_at(int line, const std::string& message) const;
 
-private:
+  private:
     std::string m_file;
     std::string m_data;
     char m_comment;

@@ -21,8 +21,7 @@ static_assert(std::endian::native == std::endian::little,
               "the VTU writer and reader assume a little-endian machine");
 
 void VtuFields::add_point_vector(const std::string& name, const Vector& interleaved, int dim) {
-    CG_VERIFY(dim == 2 || dim == 3, "point vector field {}: dim must be 2 or 3, got {}", name,
-              dim);
+    CG_VERIFY(dim == 2 || dim == 3, "point vector field {}: dim must be 2 or 3, got {}", name, dim);
     CG_VERIFY(interleaved.size() % dim == 0,
               "point vector field {}: {} values is not a multiple of dim = {}", name,
               interleaved.size(), dim);
@@ -54,10 +53,14 @@ using mesh::ElementType;
 
 std::uint8_t vtk_cell_type(ElementType type) {
     switch (type) {
-        case ElementType::Tri3: return 5;
-        case ElementType::Quad4: return 9;
-        case ElementType::Tet4: return 10;
-        case ElementType::Hex8: return 12;
+        case ElementType::Tri3:
+            return 5;
+        case ElementType::Quad4:
+            return 9;
+        case ElementType::Tet4:
+            return 10;
+        case ElementType::Hex8:
+            return 12;
     }
     return 0;
 }
@@ -110,7 +113,7 @@ void check_fields(const std::vector<Field>& fields, Index rows, const char* kind
 // Reading
 
 class VtuReader {
-public:
+  public:
     explicit VtuReader(const std::string& file) : m_file(file), m_doc(detail::parse_xml(file)) {}
 
     std::pair<mesh::Mesh, VtuFields> read() {
@@ -119,7 +122,8 @@ public:
         if (root.name != "VTKFile" || !type || *type != "UnstructuredGrid")
             fail(root, fmt::format("expected <VTKFile type=\"UnstructuredGrid\">, found <{}{}>",
                                    root.name, type ? " type=\"" + *type + "\"" : ""));
-        if (const std::string* order = root.attribute("byte_order"); order && *order != "LittleEndian")
+        if (const std::string* order = root.attribute("byte_order");
+            order && *order != "LittleEndian")
             fail(root, fmt::format("byte_order {} is not supported; save as LittleEndian",
                                    quoted(*order)));
         if (const std::string* c = root.attribute("compressor"); c && !c->empty())
@@ -127,10 +131,11 @@ public:
                                    "compression",
                                    quoted(*c)));
         if (const std::string* h = root.attribute("header_type")) {
-            if (*h == "UInt64") m_header_bytes = 8;
+            if (*h == "UInt64")
+                m_header_bytes = 8;
             else if (*h != "UInt32")
-                fail(root, fmt::format("expected header_type UInt32 or UInt64, found {}",
-                                       quoted(*h)));
+                fail(root,
+                     fmt::format("expected header_type UInt32 or UInt64, found {}", quoted(*h)));
         }
         if (const auto appended = m_doc.children(root, "AppendedData"); !appended.empty()) {
             m_appended = appended.front();
@@ -212,8 +217,8 @@ public:
             for (Index c = 0; c < m; ++c) {
                 const double id = it->values(c, 0);
                 if (id != std::floor(id) || std::abs(id) > std::numeric_limits<Index>::max())
-                    fail(piece, fmt::format("material_id of cell {} is {}, expected an integer",
-                                            c, id));
+                    fail(piece,
+                         fmt::format("material_id of cell {} is {}, expected an integer", c, id));
                 mesh.material_ids[c] = static_cast<Index>(id);
             }
             fields.cell_data.erase(it);
@@ -223,7 +228,7 @@ public:
         return {std::move(mesh), std::move(fields)};
     }
 
-private:
+  private:
     [[noreturn]] void fail(const XmlElement& e, const std::string& message) const {
         throw MeshReadError(fmt::format("{}:{}: {}", m_file, e.line, message));
     }
@@ -242,8 +247,7 @@ private:
             const std::string* n = a->attribute("Name");
             if (n && *n == name) found = a;
         }
-        if (!found)
-            fail(parent, fmt::format("<{}> has no DataArray named {}", parent.name, name));
+        if (!found) fail(parent, fmt::format("<{}> has no DataArray named {}", parent.name, name));
         return *found;
     }
 
@@ -283,8 +287,8 @@ private:
             if (const std::string* c = a->attribute("NumberOfComponents"))
                 components = parse_count(*a, *c, "NumberOfComponents");
             if (components < 1 || components > (1 << 16))
-                fail(*a, fmt::format("NumberOfComponents {} is out of the range 1..65536",
-                                     components));
+                fail(*a,
+                     fmt::format("NumberOfComponents {} is out of the range 1..65536", components));
             const std::vector<double> values =
                 read_array(*a, static_cast<std::size_t>(rows), components);
             Field f{*name, Matrix(rows, components)};
@@ -306,9 +310,16 @@ private:
         const std::string* type = a.attribute("type");
         if (!type) fail(a, "<DataArray> has no type attribute");
         int size = 0;
-        for (const auto& [name, bytes] : {std::pair<const char*, int>{"Float32", 4}, {"Float64", 8},
-                                          {"Int8", 1}, {"UInt8", 1}, {"Int16", 2}, {"UInt16", 2},
-                                          {"Int32", 4}, {"UInt32", 4}, {"Int64", 8}, {"UInt64", 8}})
+        for (const auto& [name, bytes] : {std::pair<const char*, int>{"Float32", 4},
+                                          {"Float64", 8},
+                                          {"Int8", 1},
+                                          {"UInt8", 1},
+                                          {"Int16", 2},
+                                          {"UInt16", 2},
+                                          {"Int32", 4},
+                                          {"UInt32", 4},
+                                          {"Int64", 8},
+                                          {"UInt64", 8}})
             if (*type == name) size = bytes;
         if (size == 0) fail(a, fmt::format("unsupported DataArray type {}", quoted(*type)));
         const std::string* format = a.attribute("format");
@@ -327,8 +338,7 @@ private:
             const auto [ptr, ec] =
                 std::from_chars(offset->data(), offset->data() + offset->size(), at);
             const std::string_view appended = m_doc.content(*m_appended);
-            if (ec != std::errc() || ptr != offset->data() + offset->size() ||
-                at > appended.size())
+            if (ec != std::errc() || ptr != offset->data() + offset->size() || at > appended.size())
                 fail(a, fmt::format("offset {} is not within the {} bytes of appended data",
                                     quoted(*offset), appended.size()));
             text = appended.substr(at);
@@ -361,13 +371,13 @@ private:
                 fail(a, fmt::format("the base64 data holds fewer than the {} bytes of the array",
                                     expected));
             bytes.resize(expected);
-            if (!base64.read(bytes.data(), expected))
-                fail(a, "invalid or truncated base64 data");
+            if (!base64.read(bytes.data(), expected)) fail(a, "invalid or truncated base64 data");
         }
         return decode(*type, bytes.data(), count);
     }
 
-    void check_block_size(const XmlElement& a, std::uint64_t declared, std::uint64_t expected) const {
+    void check_block_size(const XmlElement& a, std::uint64_t declared,
+                          std::uint64_t expected) const {
         if (declared != expected)
             fail(a, fmt::format("the block header declares {} bytes, but the array needs {}",
                                 declared, expected));

@@ -16,7 +16,7 @@ void check_writable(const mesh::Mesh& mesh, const std::string& file);
 
 /// Appends text to a buffer and hands it to the stream in large pieces.
 class BufferedWriter {
-public:
+  public:
     explicit BufferedWriter(std::ostream& out) : m_out(out) {}
     ~BufferedWriter() { flush(); }
     BufferedWriter(const BufferedWriter&) = delete;
@@ -32,7 +32,7 @@ public:
         m_buffer.clear();
     }
 
-private:
+  private:
     std::ostream& m_out;
     fmt::memory_buffer m_buffer;
 };

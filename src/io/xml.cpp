@@ -29,7 +29,7 @@ bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; 
 bool is_name_char(char c) { return !is_space(c) && c != '/' && c != '>' && c != '=' && c != '<'; }
 
 class XmlParser {
-public:
+  public:
     XmlParser(std::string file, std::string text) {
         m_doc.file = std::move(file);
         m_doc.text = std::move(text);
@@ -57,8 +57,7 @@ public:
                 if (gt == std::string::npos) fail(pos, "unterminated end tag");
                 std::string_view name = std::string_view(s).substr(pos + 2, gt - pos - 2);
                 while (!name.empty() && is_space(name.back())) name.remove_suffix(1);
-                if (open.empty())
-                    fail(pos, fmt::format("end tag </{}> without a start tag", name));
+                if (open.empty()) fail(pos, fmt::format("end tag </{}> without a start tag", name));
                 XmlElement& top = m_doc.elements[open.back()];
                 if (name != top.name)
                     fail(pos, fmt::format("expected </{}> (opened on line {}), found </{}>",
@@ -83,8 +82,9 @@ public:
                     const std::size_t end = s.rfind("</AppendedData");
                     if (underscore == std::string::npos || end == std::string::npos ||
                         end < underscore)
-                        fail(pos, "<AppendedData> needs a '_' marker before its data and an "
-                                  "</AppendedData> end tag");
+                        fail(pos,
+                             "<AppendedData> needs a '_' marker before its data and an "
+                             "</AppendedData> end tag");
                     e.content_begin = underscore + 1;
                     e.content_end = end;
                     pos = end;
@@ -100,7 +100,7 @@ public:
         return std::move(m_doc);
     }
 
-private:
+  private:
     int line_at(std::size_t pos) {
         // Positions are visited in increasing order, except after a failure.
         if (pos < m_line_pos) {
@@ -134,12 +134,18 @@ private:
             const std::size_t semi = raw.find(';', i);
             if (semi == std::string_view::npos) fail(pos, "'&' without ';' in an attribute value");
             const std::string_view entity = raw.substr(i + 1, semi - i - 1);
-            if (entity == "amp") out += '&';
-            else if (entity == "lt") out += '<';
-            else if (entity == "gt") out += '>';
-            else if (entity == "quot") out += '"';
-            else if (entity == "apos") out += '\'';
-            else fail(pos, fmt::format("unknown entity {}", quoted(entity)));
+            if (entity == "amp")
+                out += '&';
+            else if (entity == "lt")
+                out += '<';
+            else if (entity == "gt")
+                out += '>';
+            else if (entity == "quot")
+                out += '"';
+            else if (entity == "apos")
+                out += '\'';
+            else
+                fail(pos, fmt::format("unknown entity {}", quoted(entity)));
             i = semi;
         }
         return out;
@@ -179,14 +185,15 @@ private:
             ++i;
             while (i < s.size() && is_space(s[i])) ++i;
             if (i >= s.size() || (s[i] != '"' && s[i] != '\''))
-                fail(tag, fmt::format("expected a quoted value for attribute {} of <{}>", key,
-                                      e.name));
+                fail(tag,
+                     fmt::format("expected a quoted value for attribute {} of <{}>", key, e.name));
             const char q = s[i];
             const std::size_t close = s.find(q, i + 1);
             if (close == std::string::npos)
                 fail(tag, fmt::format("unterminated value of attribute {} of <{}>", key, e.name));
             e.attributes.emplace_back(
-                std::move(key), decode_entities(tag, std::string_view(s).substr(i + 1, close - i - 1)));
+                std::move(key),
+                decode_entities(tag, std::string_view(s).substr(i + 1, close - i - 1)));
             i = close + 1;
         }
         pos = i;
@@ -220,12 +227,23 @@ std::string xml_escape(std::string_view text) {
     std::string out;
     for (char c : text) {
         switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            case '\'': out += "&apos;"; break;
-            default: out += c;
+            case '&':
+                out += "&amp;";
+                break;
+            case '<':
+                out += "&lt;";
+                break;
+            case '>':
+                out += "&gt;";
+                break;
+            case '"':
+                out += "&quot;";
+                break;
+            case '\'':
+                out += "&apos;";
+                break;
+            default:
+                out += c;
         }
     }
     return out;

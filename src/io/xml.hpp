@@ -12,10 +12,10 @@ namespace coarsegrain::io::detail {
 struct XmlElement {
     std::string name;
     std::vector<std::pair<std::string, std::string>> attributes;  ///< entity-decoded values
-    std::vector<int> children;    ///< indices into XmlDocument::elements
+    std::vector<int> children;  ///< indices into XmlDocument::elements
     std::size_t content_begin = 0;
     std::size_t content_end = 0;
-    int line = 0;                 ///< line of the start tag
+    int line = 0;  ///< line of the start tag
 
     /// Value of an attribute, or nullptr.
     const std::string* attribute(std::string_view key) const;
@@ -47,14 +47,14 @@ std::string base64_encode(const std::uint8_t* data, std::size_t size);
 /// Decodes base64 text incrementally, skipping whitespace. Padding may end any 4-character
 /// group, so separately encoded blocks (a VTK header, then its data) decode as one stream.
 class Base64Reader {
-public:
+  public:
     explicit Base64Reader(std::string_view text) : m_text(text) {}
     /// Decodes the next n bytes into out; false if the text ends first or is not base64.
     bool read(std::uint8_t* out, std::size_t n);
     /// Upper bound on the bytes still decodable.
     std::size_t bytes_left() const { return (m_text.size() - m_pos) / 4 * 3 + 3; }
 
-private:
+  private:
     bool refill();
     std::string_view m_text;
     std::size_t m_pos = 0;

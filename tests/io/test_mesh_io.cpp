@@ -57,7 +57,8 @@ double total_measure(const mesh::Mesh& m) {
 /// Measure of the elements of each material id.
 std::map<Index, double> measure_by_material(const mesh::Mesh& m) {
     std::map<Index, double> out;
-    for (Index e = 0; e < m.num_elements(); ++e) out[m.material_ids[e]] += mesh::element_measure(m, e);
+    for (Index e = 0; e < m.num_elements(); ++e)
+        out[m.material_ids[e]] += mesh::element_measure(m, e);
     return out;
 }
 
@@ -65,11 +66,16 @@ enum class Format { Gmsh2, Gmsh4, TetGen, Medit, Vtu };
 
 std::string format_name(Format f) {
     switch (f) {
-        case Format::Gmsh2: return "gmsh22";
-        case Format::Gmsh4: return "gmsh41";
-        case Format::TetGen: return "tetgen";
-        case Format::Medit: return "medit";
-        case Format::Vtu: return "vtu";
+        case Format::Gmsh2:
+            return "gmsh22";
+        case Format::Gmsh4:
+            return "gmsh41";
+        case Format::TetGen:
+            return "tetgen";
+        case Format::Medit:
+            return "medit";
+        case Format::Vtu:
+            return "vtu";
     }
     return "?";
 }
@@ -110,14 +116,12 @@ std::string round_trip_name(const ::testing::TestParamInfo<std::tuple<Format, El
     return format_name(std::get<0>(i.param)) + "_" + mesh::element_name(std::get<1>(i.param));
 }
 
-INSTANTIATE_TEST_SUITE_P(AllTypes, RoundTrip,
-                         ::testing::Combine(::testing::Values(Format::Gmsh2, Format::Gmsh4,
-                                                              Format::Medit, Format::Vtu),
-                                            ::testing::Values(ElementType::Tri3,
-                                                              ElementType::Quad4,
-                                                              ElementType::Tet4,
-                                                              ElementType::Hex8)),
-                         round_trip_name);
+INSTANTIATE_TEST_SUITE_P(
+    AllTypes, RoundTrip,
+    ::testing::Combine(::testing::Values(Format::Gmsh2, Format::Gmsh4, Format::Medit, Format::Vtu),
+                       ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                         ElementType::Hex8)),
+    round_trip_name);
 INSTANTIATE_TEST_SUITE_P(Simplices, RoundTrip,
                          ::testing::Combine(::testing::Values(Format::TetGen),
                                             ::testing::Values(ElementType::Tri3,
@@ -196,6 +200,22 @@ TEST(GmshReference, Gmsh41TrianglesAndHexes) {
     EXPECT_EQ(hex.num_elements(), 2);
     EXPECT_EQ(hex.material_ids, IndexVector::Constant(2, 2));
     EXPECT_NEAR(total_measure(hex), 2.0, 1e-12);
+}
+
+// Sections the reader does not need are skipped whatever they hold, before and after the mesh.
+TEST(GmshReader, SkipsUnknownSections) {
+    const std::string file = test::temp_dir("io_gmsh_sections") + "/s.msh";
+    std::ofstream(file) << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
+                           "$Comments\n$Nodes\nnot a node\n$EndComments\n"
+                           "$PhysicalNames\n1\n3 7 \"soft\"\n$EndPhysicalNames\n"
+                           "$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n"
+                           "$Elements\n1\n1 4 2 7 1 1 2 3 4\n$EndElements\n"
+                           "$Periodic\n1\n2 1 2\n$EndPeriodic\n"
+                           "$NodeData\n1\n\"u\"\n$EndNodeData\n";
+    const mesh::Mesh m = io::read_gmsh(file);
+    EXPECT_EQ(m.num_elements(), 1);
+    EXPECT_EQ(m.material_ids[0], 7);
+    EXPECT_NEAR(total_measure(m), 1.0 / 6.0, 1e-16);
 }
 
 // tetgen -Q on the unit cube's corners: 1-based, no attributes, 6 positive tets.

@@ -14,11 +14,11 @@ namespace {
 
 struct BadInput {
     const char* name;
-    const char* file;     ///< written in a temporary folder; its extension picks the reader
+    const char* file;  ///< written in a temporary folder; its extension picks the reader
     std::string content;
-    const char* reported;  ///< the file the message must name (for TetGen, .node or .ele)
-    int line;              ///< the line the message must name
-    const char* what;      ///< a part of the message
+    const char* reported;       ///< the file the message must name (for TetGen, .node or .ele)
+    int line;                   ///< the line the message must name
+    const char* what;           ///< a part of the message
     const char* ele = nullptr;  ///< TetGen: content of t.ele (none if null)
 };
 

@@ -67,8 +67,8 @@ TEST_P(VtuRoundTrip, MeshAndFieldsComeBackExactly) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, VtuRoundTrip,
-                         ::testing::Values(ElementType::Tri3, ElementType::Quad4,
-                                           ElementType::Tet4, ElementType::Hex8),
+                         ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                           ElementType::Hex8),
                          [](const auto& param) { return mesh::element_name(param.param); });
 
 // An independent XML parser (Python's minidom) accepts the file and sees the arrays we expect.
@@ -83,18 +83,22 @@ TEST(Vtu, WrittenXmlParsesWithPython) {
     io::write_pvd(dir + "/series.pvd", {{0.0, "out.vtu"}, {0.5, "a&b.vtu"}});
     std::string out;
     ASSERT_EQ(test::run("python3 -c \"import xml.dom.minidom as d; "
-                        "v = d.parse('" + dir + "/out.vtu'); "
-                        "print(sorted(a.getAttribute('Name') for a in "
-                        "v.getElementsByTagName('DataArray'))); "
-                        "p = d.parse('" + dir + "/series.pvd'); "
-                        "print([(s.getAttribute('timestep'), s.getAttribute('file')) for s in "
-                        "p.getElementsByTagName('DataSet')])\"",
+                        "v = d.parse('" +
+                            dir +
+                            "/out.vtu'); "
+                            "print(sorted(a.getAttribute('Name') for a in "
+                            "v.getElementsByTagName('DataArray'))); "
+                            "p = d.parse('" +
+                            dir +
+                            "/series.pvd'); "
+                            "print([(s.getAttribute('timestep'), s.getAttribute('file')) for s in "
+                            "p.getElementsByTagName('DataSet')])\"",
                         &out),
               0)
         << out;
     EXPECT_NE(out.find("'a \"quoted\" <name> & more'"), std::string::npos) << out;
-    for (const char* name : {"'connectivity'", "'offsets'", "'types'", "'material_id'",
-                             "'displacement'", "'stress'"})
+    for (const char* name :
+         {"'connectivity'", "'offsets'", "'types'", "'material_id'", "'displacement'", "'stress'"})
         EXPECT_NE(out.find(name), std::string::npos) << name << " in " << out;
     EXPECT_NE(out.find("[('0', 'out.vtu'), ('0.5', 'a&b.vtu')]"), std::string::npos) << out;
 }
@@ -219,9 +223,11 @@ void PrintTo(const BadVtu& c, std::ostream* os) { *os << c.name; }
 
 std::string tet_vtu(const std::string& points, const std::string& cells,
                     const std::string& root = "type=\"UnstructuredGrid\"") {
-    return "<VTKFile " + root + ">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"4\" "
+    return "<VTKFile " + root +
+           ">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"4\" "
            "NumberOfCells=\"1\">\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
-           "format=\"ascii\">" + points + "</DataArray>\n</Points>\n<Cells>\n" + cells +
+           "format=\"ascii\">" +
+           points + "</DataArray>\n</Points>\n<Cells>\n" + cells +
            "</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
 }
 
@@ -238,48 +244,62 @@ const BadVtu kBadVtu[] = {
     {"MismatchedTag", "<VTKFile>\n<A>\n</B>\n", 3, "expected </A> (opened on line 2), found </B>"},
     {"NotUnstructuredGrid", tet_vtu(kPoints, kCells, "type=\"PolyData\""), 1,
      "expected <VTKFile type=\"UnstructuredGrid\">"},
-    {"Compressed", tet_vtu(kPoints, kCells,
-                           "type=\"UnstructuredGrid\" compressor=\"vtkZLibDataCompressor\""),
-     1, "compressed VTU files"},
+    {"Compressed",
+     tet_vtu(kPoints, kCells, "type=\"UnstructuredGrid\" compressor=\"vtkZLibDataCompressor\""), 1,
+     "compressed VTU files"},
     {"TooFewPoints", tet_vtu("0 0 0 1 0 0 0 1 0", kCells), 5, "holds 9 values, expected 12"},
     {"BadNumber", tet_vtu("0 0 0 1 0 0 0 1 0 0 0 x", kCells), 5, "expected a number, found 'x'"},
     {"NaNPoint", tet_vtu("0 0 0 1 0 0 0 1 0 0 0 nan", kCells), 5, "non-finite"},
-    {"WedgeCell", tet_vtu(kPoints, "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">"
-                                   "0 1 2 3</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" "
-                                   "format=\"ascii\">4</DataArray>\n<DataArray type=\"UInt8\" "
-                                   "Name=\"types\" format=\"ascii\">13</DataArray>\n"),
+    {"WedgeCell",
+     tet_vtu(kPoints,
+             "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">"
+             "0 1 2 3</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" "
+             "format=\"ascii\">4</DataArray>\n<DataArray type=\"UInt8\" "
+             "Name=\"types\" format=\"ascii\">13</DataArray>\n"),
      10, "VTK cell type 13"},
-    {"BadOffsets", tet_vtu(kPoints, "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">"
-                                    "0 1 2 3</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" "
-                                    "format=\"ascii\">3</DataArray>\n<DataArray type=\"UInt8\" "
-                                    "Name=\"types\" format=\"ascii\">10</DataArray>\n"),
+    {"BadOffsets",
+     tet_vtu(kPoints,
+             "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">"
+             "0 1 2 3</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" "
+             "format=\"ascii\">3</DataArray>\n<DataArray type=\"UInt8\" "
+             "Name=\"types\" format=\"ascii\">10</DataArray>\n"),
      9, "offset of cell 0 is 3, expected 4"},
-    {"PointOutOfRange", tet_vtu(kPoints, "<DataArray type=\"Int32\" Name=\"connectivity\" "
-                                         "format=\"ascii\">0 1 2 4</DataArray>\n<DataArray "
-                                         "type=\"Int32\" Name=\"offsets\" format=\"ascii\">4"
-                                         "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" "
-                                         "format=\"ascii\">10</DataArray>\n"),
+    {"PointOutOfRange",
+     tet_vtu(kPoints,
+             "<DataArray type=\"Int32\" Name=\"connectivity\" "
+             "format=\"ascii\">0 1 2 4</DataArray>\n<DataArray "
+             "type=\"Int32\" Name=\"offsets\" format=\"ascii\">4"
+             "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" "
+             "format=\"ascii\">10</DataArray>\n"),
      8, "cell 0 refers to point 4"},
-    {"Inverted", tet_vtu(kPoints, "<DataArray type=\"Int32\" Name=\"connectivity\" "
-                                  "format=\"ascii\">0 2 1 3</DataArray>\n<DataArray "
-                                  "type=\"Int32\" Name=\"offsets\" format=\"ascii\">4"
-                                  "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" "
-                                  "format=\"ascii\">10</DataArray>\n"),
+    {"Inverted",
+     tet_vtu(kPoints,
+             "<DataArray type=\"Int32\" Name=\"connectivity\" "
+             "format=\"ascii\">0 2 1 3</DataArray>\n<DataArray "
+             "type=\"Int32\" Name=\"offsets\" format=\"ascii\">4"
+             "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" "
+             "format=\"ascii\">10</DataArray>\n"),
      8, "is inverted"},
-    {"BadBase64", tet_vtu(kPoints, "<DataArray type=\"Int32\" Name=\"connectivity\" "
-                                   "format=\"binary\">!!!!</DataArray>\n<DataArray "
-                                   "type=\"Int32\" Name=\"offsets\" format=\"ascii\">4"
-                                   "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" "
-                                   "format=\"ascii\">10</DataArray>\n"),
+    {"BadBase64",
+     tet_vtu(kPoints,
+             "<DataArray type=\"Int32\" Name=\"connectivity\" "
+             "format=\"binary\">!!!!</DataArray>\n<DataArray "
+             "type=\"Int32\" Name=\"offsets\" format=\"ascii\">4"
+             "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" "
+             "format=\"ascii\">10</DataArray>\n"),
      8, "invalid or truncated base64"},
-    {"WrongBlockSize", tet_vtu(kPoints, "<DataArray type=\"Int32\" Name=\"connectivity\" "
-                                        "format=\"binary\">AAEAAA==</DataArray>\n<DataArray "
-                                        "type=\"Int32\" Name=\"offsets\" format=\"ascii\">4"
-                                        "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" "
-                                        "format=\"ascii\">10</DataArray>\n"),
+    {"WrongBlockSize",
+     tet_vtu(kPoints,
+             "<DataArray type=\"Int32\" Name=\"connectivity\" "
+             "format=\"binary\">AAEAAA==</DataArray>\n<DataArray "
+             "type=\"Int32\" Name=\"offsets\" format=\"ascii\">4"
+             "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" "
+             "format=\"ascii\">10</DataArray>\n"),
      8, "the block header declares 256 bytes, but the array needs 16"},
-    {"MissingTypes", tet_vtu(kPoints, "<DataArray type=\"Int32\" Name=\"connectivity\" "
-                                      "format=\"ascii\">0 1 2 3</DataArray>\n"),
+    {"MissingTypes",
+     tet_vtu(kPoints,
+             "<DataArray type=\"Int32\" Name=\"connectivity\" "
+             "format=\"ascii\">0 1 2 3</DataArray>\n"),
      7, "<Cells> has no DataArray named types"},
 };
 

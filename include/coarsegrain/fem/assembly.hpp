@@ -7,13 +7,26 @@ namespace coarsegrain::fem {
 
 enum class MassType { Lumped, Consistent };
 
-/// Global stiffness K (num_dofs square, both triangles stored, symmetric PSD).
-/// On regular grids (mesh.grid set, Quad4/Hex8) element matrices are computed once per
-/// material and reused. Element colouring makes the parallel scatter race free.
-/// @throws Error if an element is inverted/degenerate
+/// Global stiffness K = sum_e K_e (num_dofs square, compressed column storage, both triangles
+/// stored, exactly symmetric, PSD with the rigid motions as kernel).
+///
+/// The pattern is built once from the node adjacency (the dim columns of a node share one row
+/// pattern, rows sorted) and the values are written in place, never through triplets:
+/// - regular grids (mesh.grid set, Quad4/Hex8): all elements are congruent, so K_e is computed
+///   once per material table entry and each node's columns are gathered from its incident
+///   elements, one node per parallel iteration;
+/// - other meshes: element matrices are computed on the fly and scattered by an owner-computes
+///   partition of the nodes into contiguous ranges (race free, cache friendly), or by greedy
+///   element colouring when the node numbering has no locality.
+/// 64^3 hex grid with two materials (262,144 elements, 823,875 DOFs): about 0.35 s on 2 cores
+/// (bench/bench_assembly.cpp), most of it spent writing the 65M stored entries.
+/// @throws Error if the materials do not match the mesh, or an element is inverted/degenerate
+///         (the message names the element)
 SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats);
 
-/// Global mass matrix (num_dofs square), lumped (diagonal) or consistent.
+/// Global mass matrix (num_dofs square): consistent, M = sum_e ∫ rho N_a N_b times the dim x dim
+/// identity per node pair (stored entries only on the diagonal of each block), or lumped, the
+/// diagonal of its row sums, rho ∫ N_a. Same parallel schemes as stiffness_matrix.
 SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
                          MassType type);
 

@@ -31,16 +31,20 @@ struct ImageField {
 };
 
 /// Material from a grayscale PNG on a 2D grid mesh (or any 2D mesh: the image spans its
-/// bounding box). Intensity maps linearly to E between E_black and E_white. An image with the
-/// grid's resolution maps pixel to cell one to one (top image row = largest y); other resolutions
-/// are sampled at the element centroids (nearest pixel). Sets mesh.material_ids to the pixel
-/// intensity (0..255) and returns the materials by id.
-/// @throws Error naming the file if it cannot be read
+/// bounding box). Intensity maps linearly to E between E_black and E_white. Each element takes
+/// the pixel containing its centroid, the image spanning the grid box (top image row = largest
+/// y): an image with the grid's resolution thus maps pixel to cell one to one (both triangles
+/// of a Tri3 cell share the pixel), other resolutions take the nearest pixel. RGB(A) images are
+/// converted by Rec. 601 luminance round(0.299 R + 0.587 G + 0.114 B); alpha is ignored.
+/// Sets mesh.material_ids to the pixel intensity (0..255) and returns one isotropic material
+/// per intensity that occurs.
+/// @throws Error naming the file if it cannot be read or decoded, or if the mesh is not 2D
 std::map<int, Material> image_field(mesh::Mesh& mesh, const ImageField& options);
 
 /// A 3D label volume: raw bytes (one unsigned byte per voxel, x fastest, then y, then z), with
 /// dims voxels spanning the mesh's bounding box. Each element gets the label of the voxel that
-/// contains its centroid. Sets mesh.material_ids.
+/// contains its centroid (label 0..255 = material id). Sets mesh.material_ids. A 2D mesh takes
+/// a single slice (dims[2] = 1).
 /// @throws Error naming the file if it cannot be read or its size is not dims.prod()
 void voxel_field(mesh::Mesh& mesh, const std::string& file, const Eigen::Vector3i& dims);
 
