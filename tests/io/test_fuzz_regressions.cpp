@@ -44,19 +44,31 @@ TEST(FuzzSeeds, EverySeedIsAValidMesh) {
     }
 }
 
-// Inputs that once crashed the fuzzer must now read or throw coarsegrain::Error.
-TEST(FuzzRegressions, SavedInputsReadOrThrowError) {
+// Hostile inputs must read or throw coarsegrain::Error, never anything else: every seed cut
+// at 32 points (truncated files of every format), plus every input saved under
+// tests/data/fuzz_regressions/ after a fuzzer crash was fixed.
+TEST(FuzzRegressions, TruncatedAndSavedInputsReadOrThrowError) {
     const std::string dir = test::temp_dir("io_fuzz_regressions");
-    const auto saved = inputs(fs::path(COARSEGRAIN_TEST_DATA) / "fuzz_regressions");
-    if (saved.empty()) GTEST_SKIP() << "no saved crash inputs";
-    for (const fs::path& file : saved) {
-        const std::vector<std::uint8_t> bytes = bytes_of(file);
+    std::vector<std::vector<std::uint8_t>> hostile;
+    for (const fs::path& seed : inputs(fs::path(COARSEGRAIN_TEST_DATA) / ".." / ".." / "fuzz" / "corpus")) {
+        const std::vector<std::uint8_t> bytes = bytes_of(seed);
+        for (std::size_t k = 1; k < 32; ++k)
+            hostile.emplace_back(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(k * bytes.size() / 32));
+    }
+    for (const fs::path& file : inputs(fs::path(COARSEGRAIN_TEST_DATA) / "fuzz_regressions"))
+        hostile.push_back(bytes_of(file));
+    EXPECT_GE(hostile.size(), 8u * 31u);
+    std::size_t rejected = 0;
+    for (const std::vector<std::uint8_t>& bytes : hostile) {
         try {
             fuzz::read_fuzz_input(bytes.data(), bytes.size(), dir);
         } catch (const Error&) {
-            // reported as bad input: fine
+            ++rejected;  // reported as bad input: fine
         } catch (const std::exception& e) {
-            ADD_FAILURE() << file << " threw a non-coarsegrain exception: " << e.what();
+            ADD_FAILURE() << "an input of " << bytes.size()
+                          << " bytes threw a non-coarsegrain exception: " << e.what();
         }
     }
+    // Most truncations cut a section short and must be reported, not silently accepted.
+    EXPECT_GT(rejected, hostile.size() / 2);
 }
