@@ -29,28 +29,50 @@ struct SolverOptions {
 /// reports a matrix that is not positive definite (e.g. a structure without Dirichlet
 /// conditions: its rigid motions make it singular) as NotPositiveDefinite instead of
 /// returning garbage.
+///
+/// The matrix must be compressed and hold both triangles (the direct backends read the lower
+/// one); symmetry is checked as ||A - A^T||_F <= 1e-10 ||A||_F.
+///
+/// Positive definiteness: a failed Cholesky (CHOLMOD) or a non-positive LDL^T pivot is
+/// reported directly. A singular matrix may also factor "successfully" with a round-off pivot;
+/// when the pivot ratio min(D)/max(D) is below 1e-8 the solver estimates the smallest
+/// eigenvalue (two inverse-iteration steps with the factorization and the Rayleigh quotient
+/// with A) and reports the matrix if it is below 1e-14 times the largest diagonal entry, i.e.
+/// the condition number exceeds 1e14 (measurements in spd_solver.cpp). CG reports a
+/// non-positive diagonal entry at factorize and non-convergence at solve (as Error, with the
+/// iteration count and residual).
+///
+/// Not thread-safe: one solve at a time (CHOLMOD's workspace is shared). CHOLMOD uses its
+/// supernodal factorization with BLAS/OpenMP threads as configured.
 class SpdSolver {
-public:
+  public:
+    /// @throws Error if cg_tolerance is not in (0, 1) or cg_max_iterations < 0
     explicit SpdSolver(SolverOptions options = {});
     ~SpdSolver();
     SpdSolver(SpdSolver&&) noexcept;
     SpdSolver& operator=(SpdSolver&&) noexcept;
 
     /// Symbolic analysis (ordering) of A's pattern.
+    /// @throws Error if A is not square, empty or not compressed
     void analyze(const SparseMatrix& A);
-    /// Numeric factorization; analyze() first if the pattern changed or was never analyzed.
-    /// @throws NotPositiveDefinite with the size and backend status
+    /// Numeric factorization. Analyzes A first if it was never analyzed or its pattern differs
+    /// from the analyzed one (compared by size, nonzero count and a hash of the indices).
+    /// @throws Error if A has a non-finite value or is not symmetric
+    /// @throws NotPositiveDefinite with the size, backend and the failing pivot or eigenvalue
     void factorize(const SparseMatrix& A);
     /// analyze + factorize.
     void compute(const SparseMatrix& A);
     /// Solves A x = b (b: n, or n by k for several right-hand sides).
+    /// @throws Error before a successful factorize, on a size mismatch or non-finite b, and
+    ///         (CG) if the iteration does not converge
     Matrix solve(const Matrix& b) const;
     Vector solve(const Vector& b) const;
 
     Backend backend() const;
+    /// Size n of the analyzed matrix (0 before analyze).
     Index rows() const;
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> m_impl;
 };

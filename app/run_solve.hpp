@@ -1,0 +1,14 @@
+#pragma once
+#include <string>
+
+#include "coarsegrain/scene/scene.hpp"
+
+namespace coarsegrain::app {
+
+/// Solves a scene's static problem on the fine mesh and writes DIR/solution.vtu and
+/// DIR/summary.json (DESIGN.md keys); prints a short table on stdout.
+/// @param[in] read_seconds  time already spent reading the scene (reported as "read")
+void run_solve(const scene::Scene& scene, const std::string& out_dir, const std::string& command,
+               double read_seconds);
+
+}  // namespace coarsegrain::app

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Configures and builds one flavour of coarsegrain: release (default) or asan.
+#   scripts/build.sh [release|asan] [targets...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+flavour=${1:-release}
+shift || true
+case "$flavour" in
+  release) dir=build/release; flags=(-DCMAKE_BUILD_TYPE=Release) ;;
+  asan)    dir=build/asan; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCOARSEGRAIN_SANITIZE=ON
+                                  -DCOARSEGRAIN_BUILD_BENCH=OFF) ;;
+  *) echo "usage: scripts/build.sh [release|asan] [targets...]" >&2; exit 2 ;;
+esac
+if [ ! -f "$dir/build.ninja" ]; then
+  cmake -S . -B "$dir" -G Ninja "${flags[@]}" >/dev/null
+fi
+ninja -C "$dir" "$@"

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The whole test suite: set up, build, run every test (Release), then a fast subset under
+# AddressSanitizer + UndefinedBehaviorSanitizer, then a bounded fuzzing run of the mesh readers.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+jobs=$(nproc)
+
+echo "== release build and full test suite" >&2
+scripts/build.sh release
+ctest --test-dir build/release --output-on-failure -j "$jobs"
+
+echo "== sanitizer build (ASan + UBSan), fast subset" >&2
+scripts/build.sh asan coarsegrain_tests coarsegrain_cli
+ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  ctest --test-dir build/asan --output-on-failure -j "$jobs" -E 'Slow'
+
+echo "== fuzzing the mesh readers (bounded)" >&2
+scripts/fuzz.sh "${COARSEGRAIN_FUZZ_SECONDS:-60}"
+echo "all tests passed" >&2

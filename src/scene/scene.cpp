@@ -1,0 +1,351 @@
+#include "coarsegrain/scene/scene.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+#include "coarsegrain/fem/assembly.hpp"
+#include "coarsegrain/fem/loads.hpp"
+#include "coarsegrain/fem/stress.hpp"
+#include "coarsegrain/io/mesh_io.hpp"
+#include "coarsegrain/material/material_field.hpp"
+#include "coarsegrain/mesh/grid.hpp"
+#include "coarsegrain/mesh/point_locator.hpp"
+#include "json_reader.hpp"
+
+namespace coarsegrain::scene {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string resolve(const std::string& base_dir, const std::string& file) {
+    const fs::path p(file);
+    return p.is_absolute() || base_dir.empty() ? file : (fs::path(base_dir) / p).string();
+}
+
+mesh::ElementType parse_element(const JsonReader& r) {
+    const std::string s = r.string();
+    if (s == "hex") return mesh::ElementType::Hex8;
+    if (s == "tet") return mesh::ElementType::Tet4;
+    if (s == "quad") return mesh::ElementType::Quad4;
+    if (s == "tri") return mesh::ElementType::Tri3;
+    r.fail("unknown element \"{}\"; expected \"hex\", \"tet\", \"quad\" or \"tri\"", s);
+}
+
+mesh::Mesh parse_mesh(const JsonReader& r, const std::optional<int>& dimension,
+                      const std::string& base_dir) {
+    r.allow_only({"file", "grid"});
+    r.fail_unless(r.has("file") != r.has("grid"), "expected exactly one of \"file\" or \"grid\"");
+    if (auto file = r.find("file")) {
+        const std::string path = resolve(base_dir, file->string());
+        file->fail_unless(fs::exists(path), "mesh file {} does not exist", path);
+        return io::read_mesh(path);
+    }
+    const JsonReader g = r.at("grid");
+    g.allow_only({"min", "max", "cells", "element"});
+    const int dim = dimension ? *dimension : static_cast<int>(g.at("min").array_size());
+    g.fail_unless(dim == 2 || dim == 3, "grid min must have 2 or 3 numbers");
+    const mesh::ElementType type =
+        g.has("element") ? parse_element(g.at("element"))
+                         : (dim == 3 ? mesh::ElementType::Hex8 : mesh::ElementType::Quad4);
+    g.fail_unless(mesh::element_dim(type) == dim, "element \"{}\" is not a {}D element",
+                  mesh::element_name(type), dim);
+    const Eigen::VectorXd lo = g.at("min").vector(dim), hi = g.at("max").vector(dim);
+    const JsonReader c = g.at("cells");
+    c.fail_unless(c.array_size() == static_cast<std::size_t>(dim), "expected {} integers", dim);
+    Eigen::VectorXi cells(dim);
+    for (int d = 0; d < dim; ++d) {
+        cells[d] = c.at(static_cast<std::size_t>(d)).integer();
+        c.fail_unless(cells[d] >= 1 && cells[d] <= 100000, "cell counts must be in 1..100000");
+    }
+    for (int d = 0; d < dim; ++d)
+        g.fail_unless(hi[d] > lo[d], "max[{}] = {} must exceed min[{}] = {}", d, hi[d], d, lo[d]);
+    return mesh::make_grid(type, lo, hi, cells);
+}
+
+material::Material parse_material(const JsonReader& r, int dim, material::PlaneMode plane) {
+    r.allow_only({"E", "nu", "density", "C_voigt", "C_mandel"});
+    const double density = r.at("density").number();
+    r.at("density").fail_unless(density > 0, "density = {} must be > 0", density);
+    const bool iso = r.has("E") || r.has("nu");
+    const int tensors = int(r.has("C_voigt")) + int(r.has("C_mandel"));
+    r.fail_unless(iso != (tensors == 1) && tensors <= 1,
+                  "give either \"E\" and \"nu\" (isotropic) or one of \"C_voigt\" / \"C_mandel\"");
+    try {
+        if (iso) return material::isotropic(dim, r.at("E").number(), r.at("nu").number(), density, plane);
+        const bool voigt = r.has("C_voigt");
+        const JsonReader c = r.at(voigt ? "C_voigt" : "C_mandel");
+        const int n = mandel_size(dim);
+        c.fail_unless(c.array_size() == static_cast<std::size_t>(n),
+                      "expected a {}x{} matrix (rows of numbers)", n, n);
+        Matrix C(n, n);
+        for (int i = 0; i < n; ++i) C.row(i) = c.at(static_cast<std::size_t>(i)).vector(n).transpose();
+        return material::anisotropic(dim, voigt ? material::voigt_to_mandel(C) : C, density);
+    } catch (const InvalidScene&) {
+        throw;
+    } catch (const Error& e) {
+        r.fail("{}", e.what());
+    }
+}
+
+int parse_axis(const JsonReader& r, int dim) {
+    int axis = -1;
+    if (r.json().is_string()) {
+        const std::string s = r.string();
+        axis = s == "x" ? 0 : s == "y" ? 1 : s == "z" ? 2 : -1;
+    } else {
+        axis = r.integer();
+    }
+    r.fail_unless(axis >= 0 && axis < dim, "expected an axis 0..{} or \"x\", \"y\"{}", dim - 1,
+                  dim == 3 ? ", \"z\"" : "");
+    return axis;
+}
+
+std::vector<int> parse_ids(const JsonReader& r) {
+    std::vector<int> ids;
+    for (std::size_t i = 0; i < r.array_size(); ++i) ids.push_back(r.at(i).integer());
+    r.fail_unless(!ids.empty(), "expected at least one material id");
+    return ids;
+}
+
+// Applies a material_field block; returns materials it defines (image fields).
+std::map<int, material::Material> apply_material_field(const JsonReader& r, mesh::Mesh& m,
+                                                       material::PlaneMode plane,
+                                                       const std::string& base_dir) {
+    r.allow_only({"layers", "spheres", "checkerboard", "image", "voxels"});
+    r.fail_unless(r.json().size() == 1, "expected exactly one field kind");
+    const int dim = m.dim();
+    const Matrix box = mesh::bounding_box(m);
+    if (auto l = r.find("layers")) {
+        l->allow_only({"axis", "thickness", "ids", "origin"});
+        const int axis = parse_axis(l->at("axis"), dim);
+        const double origin = l->has("origin") ? l->at("origin").number() : box(0, axis);
+        material::layers(m, axis, origin, l->at("thickness").positive(), parse_ids(l->at("ids")));
+    } else if (auto s = r.find("spheres")) {
+        s->allow_only({"centres", "radius", "inside", "outside"});
+        const JsonReader c = s->at("centres");
+        Matrix centres(static_cast<Index>(c.array_size()), dim);
+        for (std::size_t i = 0; i < c.array_size(); ++i)
+            centres.row(static_cast<Index>(i)) = c.at(i).vector(dim).transpose();
+        if (s->has("outside")) m.material_ids.setConstant(s->at("outside").integer());
+        material::spheres(m, centres, s->at("radius").positive(), s->at("inside").integer());
+    } else if (auto c = r.find("checkerboard")) {
+        c->allow_only({"origin", "size", "ids"});
+        const std::vector<int> ids = parse_ids(c->at("ids"));
+        c->at("ids").fail_unless(ids.size() == 2, "expected two material ids");
+        const Eigen::VectorXd origin =
+            c->has("origin") ? c->at("origin").vector(dim) : Eigen::VectorXd(box.row(0).transpose());
+        material::checkerboard(m, origin, c->at("size").positive(), ids[0], ids[1]);
+    } else if (auto im = r.find("image")) {
+        im->allow_only({"file", "E_black", "E_white", "nu", "density"});
+        im->fail_unless(dim == 2, "image material fields need a 2D mesh");
+        material::ImageField opt;
+        opt.file = resolve(base_dir, im->at("file").string());
+        opt.E_black = im->at("E_black").positive();
+        opt.E_white = im->at("E_white").positive();
+        opt.nu = im->at("nu").number();
+        opt.density = im->at("density").positive();
+        opt.mode = plane;
+        return material::image_field(m, opt);
+    } else if (auto v = r.find("voxels")) {
+        v->allow_only({"file", "dims"});
+        v->fail_unless(dim == 3, "voxel material fields need a 3D mesh");
+        const JsonReader d = v->at("dims");
+        d.fail_unless(d.array_size() == 3, "expected 3 integers");
+        Eigen::Vector3i dims;
+        for (int k = 0; k < 3; ++k) {
+            dims[k] = d.at(static_cast<std::size_t>(k)).integer();
+            d.fail_unless(dims[k] >= 1, "voxel counts must be at least 1");
+        }
+        material::voxel_field(m, resolve(base_dir, v->at("file").string()), dims);
+    }
+    return {};
+}
+
+std::vector<BoxCondition> parse_box_conditions(const JsonReader& r, int dim, bool value_required) {
+    std::vector<BoxCondition> out;
+    for (std::size_t i = 0; i < r.array_size(); ++i) {
+        const JsonReader c = r.at(i);
+        c.allow_only({"box", "value"});
+        const JsonReader b = c.at("box");
+        b.allow_only({"min", "max"});
+        BoxCondition bc;
+        bc.key = c.path();
+        bc.box.min = b.at("min").vector(dim);
+        bc.box.max = b.at("max").vector(dim);
+        for (int d = 0; d < dim; ++d)
+            b.fail_unless(bc.box.max[d] >= bc.box.min[d], "max[{}] = {} is below min[{}] = {}",
+                          d, bc.box.max[d], d, bc.box.min[d]);
+        bc.value = value_required || c.has("value") ? c.at("value").vector(dim)
+                                                    : Eigen::VectorXd::Zero(dim);
+        out.push_back(bc);
+    }
+    return out;
+}
+
+}  // namespace
+
+Scene parse_scene(const json& j, const std::string& source, const std::string& base_dir) {
+    Scene s;
+    s.source = source;
+    const JsonReader root(j, "", s.source);
+    root.require_object();
+    root.allow_only({"description", "dimension", "mesh", "materials", "material_field", "plane",
+                     "dirichlet", "loads", "probes", "solver", "coarse"});
+    std::optional<int> dimension;
+    if (auto d = root.find("dimension")) {
+        dimension = d->integer();
+        d->fail_unless(*dimension == 2 || *dimension == 3, "expected 2 or 3, got {}", *dimension);
+    }
+    if (auto p = root.find("plane")) {
+        const std::string mode = p->string();
+        p->fail_unless(mode == "strain" || mode == "stress", "expected \"strain\" or \"stress\"");
+        s.plane = mode == "strain" ? material::PlaneMode::Strain : material::PlaneMode::Stress;
+    }
+    s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir);
+    s.dimension = s.mesh.dim();
+    root.fail_unless(!dimension || *dimension == s.dimension,
+                     "dimension is {} but the mesh is {}D", dimension.value_or(0), s.dimension);
+    const int dim = s.dimension;
+
+    if (auto f = root.find("material_field"))
+        s.materials = apply_material_field(*f, s.mesh, s.plane, base_dir);
+    if (auto m = root.find("materials")) {
+        m->require_object();
+        for (const auto& [key, value] : m->json().items()) {
+            int id = 0;
+            std::size_t used = 0;
+            try {
+                id = std::stoi(key, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            const JsonReader entry = m->at(key);
+            entry.fail_unless(used == key.size(), "material keys must be integer ids");
+            s.materials[id] = parse_material(entry, dim, s.plane);
+        }
+    }
+    root.fail_unless(!s.materials.empty(), "no materials: give \"materials\" or an image field");
+
+    if (auto d = root.find("dirichlet")) s.dirichlet = parse_box_conditions(*d, dim, false);
+    s.gravity = Eigen::VectorXd::Zero(dim);
+    if (auto l = root.find("loads")) {
+        l->allow_only({"gravity", "traction"});
+        if (auto g = l->find("gravity")) s.gravity = g->vector(dim);
+        if (auto t = l->find("traction")) s.traction = parse_box_conditions(*t, dim, true);
+    }
+    if (auto p = root.find("probes"))
+        for (std::size_t i = 0; i < p->array_size(); ++i) s.probes.push_back(p->at(i).vector(dim));
+    if (auto sv = root.find("solver")) {
+        sv->allow_only({"backend", "tolerance"});
+        if (auto b = sv->find("backend")) {
+            try {
+                s.solver.backend = solve::parse_backend(b->string());
+            } catch (const Error& e) {
+                b->fail("{}", e.what());
+            }
+        }
+        if (auto t = sv->find("tolerance")) s.solver.cg_tolerance = t->positive();
+    }
+    if (auto c = root.find("coarse")) s.coarse = c->json();
+    return s;
+}
+
+Scene load_scene(const std::string& file) {
+    std::ifstream in(file);
+    CG_VERIFY_AS(InvalidScene, in.good(), "cannot open scene file {}", file);
+    json j;
+    try {
+        j = json::parse(in);
+    } catch (const json::parse_error& e) {
+        CG_VERIFY_AS(InvalidScene, false, "{}: not valid JSON: {}", file, e.what());
+    }
+    return parse_scene(j, file, fs::path(file).parent_path().string());
+}
+
+FineModel build_fine_model(const Scene& scene, Timings* timings) {
+    FineModel m;
+    m.mesh = scene.mesh;
+    {
+        const Phase phase("assemble", timings);
+        try {
+            m.materials = material::assign(m.mesh, scene.materials);
+        } catch (const Error& e) {
+            CG_VERIFY_AS(InvalidScene, false, "{}: materials: {}", scene.source, e.what());
+        }
+        m.boundary = mesh::boundary(m.mesh);
+        for (const BoxCondition& c : scene.dirichlet) {
+            const std::vector<Index> nodes = mesh::nodes_in_box(m.mesh, c.box.min, c.box.max);
+            CG_VERIFY_AS(InvalidScene, !nodes.empty(), "{}: {}.box selects no node of the mesh",
+                         scene.source, c.key);
+            m.bc.fix_nodes(nodes, c.value);
+        }
+        m.K = fem::stiffness_matrix(m.mesh, m.materials);
+        m.f = Vector::Zero(m.mesh.num_dofs());
+        if (scene.gravity.squaredNorm() > 0) m.f += fem::gravity_load(m.mesh, m.materials, scene.gravity);
+        for (const BoxCondition& c : scene.traction) {
+            const std::vector<Index> facets =
+                mesh::facets_in_box(m.mesh, m.boundary, c.box.min, c.box.max);
+            CG_VERIFY_AS(InvalidScene, !facets.empty(),
+                         "{}: {}.box selects no boundary {} of the mesh", scene.source, c.key,
+                         m.mesh.dim() == 3 ? "face" : "edge");
+            m.f += fem::traction_load(m.mesh, m.boundary, facets, c.value);
+        }
+    }
+    return m;
+}
+
+StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
+                            Timings* timings) {
+    const fem::ReducedSystem sys = fem::reduce(model.K, model.f, model.bc);
+    solve::SpdSolver solver(options);
+    {
+        const Phase phase("factorize", timings);
+        solver.compute(sys.K);
+    }
+    StaticSolution s;
+    {
+        const Phase phase("solve", timings);
+        const Vector u_free = solver.solve(sys.rhs);
+        s.u = fem::expand(sys, u_free, model.bc, model.mesh.num_dofs());
+    }
+    s.strain_energy = fem::strain_energy(model.K, s.u);
+    return s;
+}
+
+std::vector<Eigen::VectorXd> probe_displacements(const Scene& scene, const mesh::Mesh& m,
+                                                 const Vector& u) {
+    std::vector<Eigen::VectorXd> out;
+    if (scene.probes.empty()) return out;
+    const mesh::PointLocator locator(m);
+    for (std::size_t i = 0; i < scene.probes.size(); ++i) {
+        const auto loc = locator.locate(scene.probes[i]);
+        CG_VERIFY_AS(InvalidScene, loc.has_value(), "{}: probes[{}] = [{}] lies outside the mesh",
+                     scene.source, i, fmt::join(scene.probes[i], ", "));
+        out.push_back(mesh::interpolate(m, *loc, u, m.dim()));
+    }
+    return out;
+}
+
+json demo_scene(double scale) {
+    const int nx = std::max(4, static_cast<int>(64 * scale));
+    const int ny = std::max(2, static_cast<int>(16 * scale));
+    return json{
+        {"description",
+         "Accordion beam: a 4x1x1 block of alternating stiff (E = 1e5) and soft (E = 1e2) "
+         "layers across its axis, clamped at x = 0 and hanging under gravity."},
+        {"dimension", 3},
+        {"mesh", {{"grid", {{"min", {0, 0, 0}}, {"max", {4, 1, 1}}, {"cells", {nx, ny, ny}},
+                            {"element", "hex"}}}}},
+        {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.25}, {"ids", {1, 2}}}}}},
+        {"materials",
+         {{"1", {{"E", 1e5}, {"nu", 0.3}, {"density", 1.0}}},
+          {"2", {{"E", 1e2}, {"nu", 0.45}, {"density", 1.0}}}}},
+        {"dirichlet", {{{"box", {{"min", {-1e-9, -1, -1}}, {"max", {1e-9, 2, 2}}}}}}},
+        {"loads", {{"gravity", {0, 0, -9.81}}}},
+        {"probes", {{4, 0.5, 0.5}, {2, 0.5, 0.5}, {1, 0.5, 0.5}}},
+    };
+}
+
+}  // namespace coarsegrain::scene

@@ -1,0 +1,188 @@
+// End-to-end tests of the coarsegrain executable: outputs, exit codes and error messages.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "coarsegrain/io/vtu.hpp"
+#include "test_util.hpp"
+
+using namespace coarsegrain;
+using nlohmann::json;
+using ::testing::HasSubstr;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kCli = COARSEGRAIN_CLI;
+
+// A small valid 3D scene: a 2x1x1 two-material bar clamped at x = 0, gravity and end traction.
+json small_scene() {
+    return json::parse(R"({
+      "dimension": 3,
+      "mesh": { "grid": { "min": [0,0,0], "max": [2,1,1], "cells": [8,4,4], "element": "hex" } },
+      "material_field": { "layers": { "axis": "x", "thickness": 0.5, "ids": [1, 2] } },
+      "materials": { "1": { "E": 1000, "nu": 0.3, "density": 1 },
+                     "2": { "E": 10, "nu": 0.45, "density": 2 } },
+      "dirichlet": [ { "box": { "min": [-1e-9,-1,-1], "max": [1e-9,2,2] } } ],
+      "loads": { "gravity": [0,0,-1],
+                 "traction": [ { "box": { "min": [2,-1,-1], "max": [2,2,2] }, "value": [0,0,-0.1] } ] },
+      "probes": [ [2,0.5,0.5], [1,0.5,0.5] ]
+    })");
+}
+
+std::string write_scene(const std::string& dir, const json& j, const std::string& name = "scene.json") {
+    const std::string file = dir + "/" + name;
+    std::ofstream(file) << j.dump(2);
+    return file;
+}
+
+json read_json(const std::string& file) {
+    std::ifstream in(file);
+    return json::parse(in);
+}
+
+struct Result {
+    int code;
+    std::string output;
+};
+
+Result cli(const std::string& args) {
+    Result r;
+    r.code = test::run(kCli + " --quiet " + args, &r.output);
+    return r;
+}
+
+}  // namespace
+
+TEST(Cli, SolveWritesSummaryAndVtuWithTheContractKeys) {
+    const std::string dir = test::temp_dir("cli_solve");
+    const Result r = cli("solve " + write_scene(dir, small_scene()) + " --out " + dir + "/out");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const json s = read_json(dir + "/out/summary.json");
+    EXPECT_EQ(s["command"], "solve");
+    EXPECT_EQ(s["fine"]["nodes"], 9 * 5 * 5);
+    EXPECT_EQ(s["fine"]["elements"], 8 * 4 * 4);
+    EXPECT_EQ(s["fine"]["dofs"], 3 * 9 * 5 * 5);
+    for (const char* phase : {"read", "assemble", "factorize", "solve", "write"})
+        EXPECT_TRUE(s["fine"]["timings"].contains(phase)) << phase;
+    ASSERT_EQ(s["probes"].size(), 2u);
+    EXPECT_EQ(s["probes"][0]["point"], json({2, 0.5, 0.5}));
+    // Gravity and traction both push down: the tip moves down, more than the middle.
+    const double tip = s["probes"][0]["u"][2], mid = s["probes"][1]["u"][2];
+    EXPECT_LT(tip, mid);
+    EXPECT_LT(mid, 0.0);
+    EXPECT_GE(s["max_displacement"].get<double>(), -tip);
+    EXPECT_GT(s["strain_energy"].get<double>(), 0.0);
+    // At equilibrium the strain energy is half the work of the load (Clapeyron), to round-off.
+    EXPECT_NEAR(s["strain_energy"].get<double>(), 0.5 * s["compliance"].get<double>(),
+                1e-9 * s["strain_energy"].get<double>());
+
+    const auto [m, fields] = io::read_vtu(dir + "/out/solution.vtu");
+    EXPECT_EQ(m.num_nodes(), 9 * 5 * 5);
+    std::vector<std::string> names;
+    for (const auto& f : fields.point_data) names.push_back(f.name);
+    for (const auto& f : fields.cell_data) names.push_back(f.name);
+    for (const char* name : {"displacement", "E", "stress", "von_mises"})
+        EXPECT_THAT(names, ::testing::Contains(std::string(name)));
+    // read_vtu returns the "material_id" cell field as the mesh's material ids.
+    EXPECT_EQ(m.material_ids.minCoeff(), 1);
+    EXPECT_EQ(m.material_ids.maxCoeff(), 2);
+    for (const auto& entry : fs::directory_iterator(dir + "/out"))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos)
+            << "temporary file left behind: " << entry.path();
+}
+
+TEST(Cli, DemoRunsAtSmallScale) {
+    const std::string dir = test::temp_dir("cli_demo");
+    const Result r = cli("demo --scale 0.25 --out " + dir);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("max |u|"));
+    const json s = read_json(dir + "/summary.json");
+    EXPECT_EQ(s["command"], "demo");
+    EXPECT_EQ(s["fine"]["elements"], 16 * 4 * 4);
+    // The tip of a beam clamped at x = 0 under gravity -z moves down.
+    EXPECT_LT(s["probes"][0]["u"][2].get<double>(), 0.0);
+    EXPECT_TRUE(fs::exists(dir + "/solution.vtu"));
+}
+
+TEST(Cli, UsageErrorsExitWithTwo) {
+    EXPECT_EQ(cli("").code, 2);
+    EXPECT_EQ(cli("frobnicate").code, 2);
+    EXPECT_EQ(cli("solve").code, 2);
+    EXPECT_EQ(cli("--help").code, 0);
+}
+
+// One bad-input case: the scene modification, and text the single error line must contain.
+struct BadScene {
+    std::string name;
+    std::function<void(json&)> modify;
+    std::string message;
+};
+
+class CliBadScene : public ::testing::TestWithParam<BadScene> {};
+
+TEST_P(CliBadScene, FailsWithOneClearMessageAndNoOutput) {
+    const BadScene& bad = GetParam();
+    const std::string dir = test::temp_dir("cli_bad_" + bad.name);
+    json j = small_scene();
+    bad.modify(j);
+    const Result r = cli("solve " + write_scene(dir, j) + " --out " + dir + "/out");
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("error: "));
+    EXPECT_THAT(r.output, HasSubstr(bad.message));
+    EXPECT_FALSE(fs::exists(dir + "/out/summary.json"));
+    EXPECT_FALSE(fs::exists(dir + "/out/solution.vtu"));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, CliBadScene,
+    ::testing::Values(
+        BadScene{"unknown_key", [](json& j) { j["gravity"] = {0, 0, 1}; },
+                 "gravity: unknown key"},
+        BadScene{"missing_material", [](json& j) { j["materials"].erase("2"); },
+                 "material id 2"},
+        BadScene{"bad_nu", [](json& j) { j["materials"]["1"]["nu"] = 0.5; }, "materials.1"},
+        BadScene{"negative_E", [](json& j) { j["materials"]["1"]["E"] = -1; }, "materials.1"},
+        BadScene{"empty_dirichlet_box",
+                 [](json& j) { j["dirichlet"][0]["box"]["min"] = {5, 5, 5};
+                               j["dirichlet"][0]["box"]["max"] = {6, 6, 6}; },
+                 "dirichlet[0].box selects no node"},
+        BadScene{"empty_traction_box",
+                 [](json& j) { j["loads"]["traction"][0]["box"]["min"] = {0.5, 0.2, 0.2};
+                               j["loads"]["traction"][0]["box"]["max"] = {0.6, 0.3, 0.3}; },
+                 "traction[0].box selects no boundary face"},
+        BadScene{"singular", [](json& j) { j.erase("dirichlet"); }, "not positive definite"},
+        BadScene{"short_vector", [](json& j) { j["loads"]["gravity"] = {0, -1}; },
+                 "loads.gravity: expected 3 numbers"},
+        BadScene{"probe_outside", [](json& j) { j["probes"] = {{9, 9, 9}}; },
+                 "probes[0]"},
+        BadScene{"missing_mesh_file", [](json& j) { j["mesh"] = {{"file", "nope.msh"}}; },
+                 "nope.msh"},
+        BadScene{"bad_element", [](json& j) { j["mesh"]["grid"]["element"] = "prism"; },
+                 "mesh.grid.element: unknown element"},
+        BadScene{"bad_backend", [](json& j) { j["solver"] = {{"backend", "magic"}}; },
+                 "solver.backend"}),
+    [](const auto& p) { return p.param.name; });
+
+TEST(Cli, InvalidJsonNamesTheFile) {
+    const std::string dir = test::temp_dir("cli_invalid_json");
+    const std::string file = dir + "/broken.json";
+    std::ofstream(file) << "{ \"mesh\": ";
+    const Result r = cli("solve " + file + " --out " + dir + "/out");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_THAT(r.output, HasSubstr("broken.json"));
+    EXPECT_THAT(r.output, HasSubstr("not valid JSON"));
+}
+
+TEST(Cli, UnwritableOutputFolderIsReportedBeforeAnyWork) {
+    const std::string dir = test::temp_dir("cli_unwritable");
+    const std::string file = write_scene(dir, small_scene());
+    std::ofstream(dir + "/blocker") << "a file, not a folder";
+    const Result r = cli("solve " + file + " --out " + dir + "/blocker/out");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_THAT(r.output, HasSubstr("blocker/out"));
+}
