@@ -1,9 +1,8 @@
 #pragma once
 /// @file Helpers shared by the FEM tests: solving with Dirichlet conditions, random anisotropic
-/// tensors, box boundaries, and independent shape functions and quadrature rules.
+/// tensors, box boundaries and faces, and independent shape functions and quadrature rules.
 #include <gtest/gtest.h>
 
-#include <Eigen/SparseCholesky>
 #include <array>
 #include <cmath>
 #include <random>
@@ -13,15 +12,16 @@
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/mesh/grid.hpp"
+#include "coarsegrain/solve/spd_solver.hpp"
 
 namespace coarsegrain::test {
 
-/// Solves K u = f with the Dirichlet conditions eliminated (Eigen SimplicialLDLT).
+/// Solves K u = f with the Dirichlet conditions eliminated (solver facade, CHOLMOD).
 inline Vector solve_dirichlet(const SparseMatrix& K, const Vector& f, const fem::Dirichlet& bc) {
     const fem::ReducedSystem sys = fem::reduce(K, f, bc);
-    const Eigen::SimplicialLDLT<SparseMatrix> ldlt(sys.K);
-    EXPECT_EQ(ldlt.info(), Eigen::Success);
-    return fem::expand(sys, ldlt.solve(sys.rhs), bc, static_cast<Index>(K.rows()));
+    solve::SpdSolver solver;
+    solver.compute(sys.K);
+    return fem::expand(sys, solver.solve(sys.rhs), bc, static_cast<Index>(K.rows()));
 }
 
 /// A random symmetric positive-definite Mandel tensor (n = 3 or 6) with eigenvalues in
@@ -54,52 +54,16 @@ inline std::vector<Index> box_boundary_nodes(const mesh::Mesh& m) {
     return nodes;
 }
 
-/// Local facets of each element type (node orderings of mesh::ElementType); orientation is
-/// irrelevant here (the loads only use facet measures).
-inline std::vector<std::vector<int>> local_facets(mesh::ElementType type) {
-    switch (type) {
-        case mesh::ElementType::Tri3: return {{0, 1}, {1, 2}, {2, 0}};
-        case mesh::ElementType::Quad4: return {{0, 1}, {1, 2}, {2, 3}, {3, 0}};
-        case mesh::ElementType::Tet4: return {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
-        case mesh::ElementType::Hex8:
-            return {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                    {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-    }
-    return {};
-}
-
-/// A Boundary (facets, owner, local_facet, areas only) of the element facets whose nodes all
-/// satisfy x_axis == value: built by hand for the tests of traction_load.
-inline mesh::Boundary plane_facets(const mesh::Mesh& m, int axis, double value) {
-    const auto facets = local_facets(m.type);
-    std::vector<std::vector<Index>> rows;
-    std::vector<Index> owner, local;
-    for (Index e = 0; e < m.num_elements(); ++e)
-        for (std::size_t f = 0; f < facets.size(); ++f) {
-            bool on = true;
-            std::vector<Index> nodes;
-            for (const int a : facets[f]) {
-                nodes.push_back(m.elements(e, a));
-                on = on && std::abs(m.rest_positions(nodes.back(), axis) - value) < 1e-12;
-            }
-            if (on) {
-                rows.push_back(nodes);
-                owner.push_back(e);
-                local.push_back(static_cast<Index>(f));
-            }
-        }
-    mesh::Boundary b;
-    const Index nf = static_cast<Index>(rows.size());
-    const Index npf = nf ? static_cast<Index>(rows[0].size()) : 0;
-    b.facets.resize(nf, npf);
-    b.owner.resize(nf);
-    b.local_facet.resize(nf);
-    for (Index f = 0; f < nf; ++f) {
-        for (Index a = 0; a < npf; ++a) b.facets(f, a) = rows[f][a];
-        b.owner[f] = owner[f];
-        b.local_facet[f] = local[f];
-    }
-    return b;
+/// The boundary facets of m whose nodes all lie on the plane x_axis = value (mesh::boundary,
+/// then mesh::facets_in_box on a thin box around the plane).
+inline std::vector<Index> plane_facets(const mesh::Mesh& m, const mesh::Boundary& b, int axis,
+                                       double value) {
+    const Matrix box = mesh::bounding_box(m);
+    Eigen::VectorXd lo = box.row(0).transpose().array() - 1e-9;
+    Eigen::VectorXd hi = box.row(1).transpose().array() + 1e-9;
+    lo[axis] = value - 1e-9;
+    hi[axis] = value + 1e-9;
+    return mesh::facets_in_box(m, b, lo, hi);
 }
 
 /// All indices 0..n-1.
