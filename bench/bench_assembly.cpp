@@ -33,8 +33,7 @@ void distort(mesh::Mesh& m, int n) {
     for (Index v = 0; v < m.num_nodes(); ++v) {
         auto x = m.rest_positions.row(v);
         if ((x.array() > 1e-12).all() && (x.array() < 1 - 1e-12).all())
-            for (int d = 0; d < m.dim(); ++d)
-                x[d] += 0.2 * h * std::sin(12.9898 * v + 78.233 * d);
+            for (int d = 0; d < m.dim(); ++d) x[d] += 0.2 * h * std::sin(12.9898 * v + 78.233 * d);
     }
     m.grid.reset();
 }
@@ -75,14 +74,27 @@ void BM_MassGrid(benchmark::State& state, mesh::ElementType type) {
 
 // The headline case: 64^3 hexes = 262,144 elements, 823,875 DOFs, two materials.
 BENCHMARK_CAPTURE(BM_StiffnessGrid, Hex, mesh::ElementType::Hex8)
-    ->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Arg(32)
+    ->Arg(64)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(BM_StiffnessDistorted, Hex, mesh::ElementType::Hex8)
-    ->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Arg(32)
+    ->Arg(64)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(BM_StiffnessDistorted, Tet, mesh::ElementType::Tet4)
-    ->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Arg(32)
+    ->Arg(64)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(BM_MassGrid, Hex, mesh::ElementType::Hex8)
-    ->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Arg(64)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(BM_StiffnessGrid, Quad, mesh::ElementType::Quad4)
-    ->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Arg(512)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 BENCHMARK_MAIN();

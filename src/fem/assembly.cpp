@@ -122,9 +122,9 @@ void add_columns(const mesh::Mesh& mesh, Skeleton& s, Index e, const ElementMatr
 /// contiguous slab of the matrix and advance with the element index, so they hit the cache;
 /// an element with nodes in several ranges is computed once per range, a thin layer when the
 /// numbering has locality (a 64^3 grid with 4 ranges recomputes ~1% of its elements).
-/// Measured on 64^3 distorted grids, 1 thread: 0.97 s against 2.73 s for 1.57M tets and
-/// 2.09 s against 2.40 s for 262k hexes compared with the coloured scatter, whose passes over
-/// the colours (31 for the tets) each sweep the whole matrix.
+/// Measured on 64^3 distorted grids, 1 thread, side by side on a busy machine: 0.97 s against
+/// 2.73 s for 1.57M tets and 2.09 s against 2.40 s for 262k hexes compared with the coloured
+/// scatter, whose passes over the colours (31 for the tets) each sweep the whole matrix.
 ///
 /// Fallback when the numbering has no locality (recomputation above 25%): greedy element
 /// colouring, one parallel pass per colour (elements of one colour share no node).
@@ -137,8 +137,8 @@ void scatter(const mesh::Mesh& mesh, Skeleton& s, ComputeElementMatrix&& compute
     std::vector<Index> first(static_cast<std::size_t>(parts) + 1, nv);
     first[0] = 0;
     for (int t = 1; t < parts; ++t) {
-        const Index target = static_cast<Index>(
-            static_cast<long long>(s.graph.ptr[nv]) * t / parts);
+        const Index target =
+            static_cast<Index>(static_cast<long long>(s.graph.ptr[nv]) * t / parts);
         first[t] = static_cast<Index>(
             std::lower_bound(s.graph.ptr.begin(), s.graph.ptr.end() - 1, target) -
             s.graph.ptr.begin());
@@ -247,8 +247,7 @@ SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterial
             if constexpr (!S::simplex)
                 if (congruent_grid(mesh)) cell = kernels::load_weights<S>(grid_cell<S>(*mesh.grid));
             detail::parallel_for(mesh.num_elements(), [&](Index e) {
-                w[e] = mats.of(e).density *
-                       (cell ? *cell : detail::for_element(e, [&] {
+                w[e] = mats.of(e).density * (cell ? *cell : detail::for_element(e, [&] {
                            return kernels::load_weights<S>(kernels::element_coords<S>(mesh, e));
                        }));
             });
@@ -285,8 +284,7 @@ SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterial
             }
         }
         scatter<S, false>(mesh, s, [&](Index e) {
-            return kernels::scalar_mass<S>(kernels::element_coords<S>(mesh, e),
-                                           mats.of(e).density);
+            return kernels::scalar_mass<S>(kernels::element_coords<S>(mesh, e), mats.of(e).density);
         });
         return M;
     });

@@ -40,8 +40,8 @@ void merge(Dirichlet& bc, std::vector<std::pair<Index, double>> added) {
 
 void Dirichlet::fix_nodes(const std::vector<Index>& nodes, const Eigen::VectorXd& value) {
     const int dim = static_cast<int>(value.size());
-    CG_VERIFY(dim == 2 || dim == 3, "Dirichlet::fix_nodes: value has {} components, expected 2 or 3",
-              dim);
+    CG_VERIFY(dim == 2 || dim == 3,
+              "Dirichlet::fix_nodes: value has {} components, expected 2 or 3", dim);
     std::vector<std::pair<Index, double>> added;
     added.reserve(nodes.size() * static_cast<std::size_t>(dim));
     for (const Index v : nodes) {
@@ -139,10 +139,9 @@ ReducedSystem reduce(const SparseMatrix& K, const Vector& f, const Dirichlet& bc
     return sys;
 }
 
-Vector expand(const ReducedSystem& sys, const Vector& u_free, const Dirichlet& bc,
-              Index num_dofs) {
-    CG_VERIFY(u_free.size() == sys.free_dofs.size(),
-              "expand: {} free values for {} free DOFs", u_free.size(), sys.free_dofs.size());
+Vector expand(const ReducedSystem& sys, const Vector& u_free, const Dirichlet& bc, Index num_dofs) {
+    CG_VERIFY(u_free.size() == sys.free_dofs.size(), "expand: {} free values for {} free DOFs",
+              u_free.size(), sys.free_dofs.size());
     CG_VERIFY(sys.free_dofs.size() + static_cast<Index>(bc.dofs.size()) == num_dofs,
               "expand: {} free + {} prescribed DOFs do not make {}", sys.free_dofs.size(),
               bc.dofs.size(), num_dofs);

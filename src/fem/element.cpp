@@ -25,8 +25,8 @@ Matrix strain_displacement(mesh::ElementType type, const Matrix& X, const Eigen:
                   xi.size(), S::dim);
         double det = 0;
         const typename S::Point p = S::simplex ? S::centre() : typename S::Point(xi);
-        const Matrix B = kernels::strain_displacement<S>(kernels::physical_gradients<S>(
-            fixed_coords<S>(X, "strain_displacement"), p, det));
+        const Matrix B = kernels::strain_displacement<S>(
+            kernels::physical_gradients<S>(fixed_coords<S>(X, "strain_displacement"), p, det));
         if (detJ) *detJ = det;
         return B;
     });
@@ -66,9 +66,8 @@ Eigen::VectorXd element_load_weights(mesh::ElementType type, const Matrix& X) {
 }
 
 Eigen::VectorXd element_centre(mesh::ElementType type) {
-    return kernels::dispatch(type, [&](auto shape) -> Eigen::VectorXd {
-        return decltype(shape)::centre();
-    });
+    return kernels::dispatch(
+        type, [&](auto shape) -> Eigen::VectorXd { return decltype(shape)::centre(); });
 }
 
 }  // namespace coarsegrain::fem

@@ -26,8 +26,7 @@ struct ShearPairs<2> {
 };
 template <>
 struct ShearPairs<3> {
-    static constexpr std::array<std::array<int, 3>, 3> value = {
-        {{3, 1, 2}, {4, 0, 2}, {5, 0, 1}}};
+    static constexpr std::array<std::array<int, 3>, 3> value = {{{3, 1, 2}, {4, 0, 2}, {5, 0, 1}}};
 };
 
 /// Quadrature rule on the reference element: points (Dim each) and weights.
@@ -233,7 +232,7 @@ template <class S>
 ElementMatrix<S> stiffness(const Coords<S>& X, const Tensor<S>& C) {
     constexpr int D = S::dim, npe = S::npe;
     using Block = Eigen::Matrix<double, npe, npe>;
-    const Eigen::Matrix<double, D * D, D * D> A = gradient_tensor<D>(C);
+    const Eigen::Matrix<double, D * D, D* D> A = gradient_tensor<D>(C);
     std::array<Block, D*(D + 1) / 2> Kij;
     for (Block& k : Kij) k.setZero();
     const auto add_point = [&](const typename S::Point& xi, double weight) {
@@ -301,8 +300,7 @@ Eigen::Matrix<double, S::npe, 1> load_weights(const Coords<S>& X) {
     double detJ = 0;
     if constexpr (S::simplex) {
         physical_gradients<S>(X, S::centre(), detJ);
-        return Eigen::Matrix<double, S::npe, 1>::Constant(detJ * S::reference_measure() /
-                                                          S::npe);
+        return Eigen::Matrix<double, S::npe, 1>::Constant(detJ * S::reference_measure() / S::npe);
     } else {
         Eigen::Matrix<double, S::npe, 1> w = Eigen::Matrix<double, S::npe, 1>::Zero();
         const auto rule = S::load_rule();
@@ -326,10 +324,14 @@ Coords<S> element_coords(const mesh::Mesh& mesh, Index e) {
 template <class F>
 decltype(auto) dispatch(ElementType type, F&& f) {
     switch (type) {
-        case ElementType::Tri3: return f(Shape<ElementType::Tri3>{});
-        case ElementType::Quad4: return f(Shape<ElementType::Quad4>{});
-        case ElementType::Tet4: return f(Shape<ElementType::Tet4>{});
-        case ElementType::Hex8: break;
+        case ElementType::Tri3:
+            return f(Shape<ElementType::Tri3>{});
+        case ElementType::Quad4:
+            return f(Shape<ElementType::Quad4>{});
+        case ElementType::Tet4:
+            return f(Shape<ElementType::Tet4>{});
+        case ElementType::Hex8:
+            break;
     }
     return f(Shape<ElementType::Hex8>{});
 }

@@ -67,8 +67,8 @@ Eigen::VectorXd facet_weights(const Matrix& P) {
 Vector traction_load(const mesh::Mesh& mesh, const mesh::Boundary& b,
                      const std::vector<Index>& facets, const Eigen::VectorXd& t) {
     const int dim = mesh.dim();
-    CG_VERIFY(t.size() == dim, "traction_load: traction has {} components, expected {}",
-              t.size(), dim);
+    CG_VERIFY(t.size() == dim, "traction_load: traction has {} components, expected {}", t.size(),
+              dim);
     const Index nf = static_cast<Index>(b.facets.cols());
     CG_VERIFY((dim == 2 && nf == 2) || (dim == 3 && (nf == 3 || nf == 4)),
               "traction_load: {}D boundary facets must have {} nodes, got {}", dim,
@@ -81,8 +81,8 @@ Vector traction_load(const mesh::Mesh& mesh, const mesh::Boundary& b,
         for (Index a = 0; a < nf; ++a) {
             const Index v = b.facets(k, a);
             CG_VERIFY(v >= 0 && v < mesh.num_nodes(),
-                      "traction_load: facet {} refers to node {}, but nodes are numbered 0..{}",
-                      k, v, mesh.num_nodes() - 1);
+                      "traction_load: facet {} refers to node {}, but nodes are numbered 0..{}", k,
+                      v, mesh.num_nodes() - 1);
             P.row(a) = mesh.rest_positions.row(v);
         }
         const Eigen::VectorXd w = facet_weights(P);

@@ -8,10 +8,10 @@ namespace coarsegrain::fem::detail {
 
 void verify_materials(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
                       const char* what) {
-    CG_VERIFY(mats.size() == mesh.num_elements(), "{}: {} element materials for {} elements",
-              what, mats.size(), mesh.num_elements());
-    CG_VERIFY(mats.dim == mesh.dim(), "{}: materials are {}D but the mesh is {}D", what,
-              mats.dim, mesh.dim());
+    CG_VERIFY(mats.size() == mesh.num_elements(), "{}: {} element materials for {} elements", what,
+              mats.size(), mesh.num_elements());
+    CG_VERIFY(mats.dim == mesh.dim(), "{}: materials are {}D but the mesh is {}D", what, mats.dim,
+              mesh.dim());
     const Index nt = static_cast<Index>(mats.table.size());
     for (Index e = 0; e < mats.size(); ++e)
         CG_VERIFY(mats.index[e] >= 0 && mats.index[e] < nt,

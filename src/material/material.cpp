@@ -16,8 +16,7 @@ void verify_dim(int dim, const char* what) {
 }
 
 void verify_density(double density, const char* what) {
-    CG_VERIFY(std::isfinite(density) && density > 0, "{}: density = {} must be > 0", what,
-              density);
+    CG_VERIFY(std::isfinite(density) && density > 0, "{}: density = {} must be > 0", what, density);
 }
 
 /// Mandel scaling s with C_mandel = diag(s) C_voigt diag(s): 1 on normal, √2 on shear components.
@@ -110,8 +109,8 @@ Matrix voigt_to_mandel(const Matrix& C_voigt) {
 }
 
 Matrix mandel_to_voigt(const Matrix& C_mandel) {
-    CG_VERIFY(C_mandel.rows() == C_mandel.cols(), "mandel_to_voigt: the tensor is {}x{}, not square",
-              C_mandel.rows(), C_mandel.cols());
+    CG_VERIFY(C_mandel.rows() == C_mandel.cols(),
+              "mandel_to_voigt: the tensor is {}x{}, not square", C_mandel.rows(), C_mandel.cols());
     const Eigen::VectorXd s =
         mandel_scaling(static_cast<Index>(C_mandel.rows()), "mandel_to_voigt");
     const Eigen::VectorXd inv = s.cwiseInverse();
@@ -151,7 +150,9 @@ ElementMaterials assign(const mesh::Mesh& mesh, const std::map<int, Material>& b
             CG_VERIFY(false,
                       "assign materials: material id {} is used by {} element(s) but has no "
                       "material (defined ids: {})",
-                      id, n, defined.empty() ? std::string("none") : fmt::format("{}", fmt::join(defined, ", ")));
+                      id, n,
+                      defined.empty() ? std::string("none")
+                                      : fmt::format("{}", fmt::join(defined, ", ")));
         }
         slot[id] = static_cast<Index>(mats.table.size());
         mats.table.push_back(it->second);

@@ -53,8 +53,8 @@ void layers(mesh::Mesh& mesh, int axis, double origin, double thickness,
     const int n = static_cast<int>(ids.size());
     mesh.material_ids.resize(mesh.num_elements());
     for (Index e = 0; e < mesh.num_elements(); ++e)
-        mesh.material_ids[e] = ids[static_cast<std::size_t>(
-            periodic_index(c(e, axis) - origin, thickness, n))];
+        mesh.material_ids[e] =
+            ids[static_cast<std::size_t>(periodic_index(c(e, axis) - origin, thickness, n))];
 }
 
 void spheres(mesh::Mesh& mesh, const Matrix& centres, double radius, int inside) {
@@ -81,8 +81,7 @@ void checkerboard(mesh::Mesh& mesh, const Eigen::VectorXd& origin, double size, 
     mesh.material_ids.resize(mesh.num_elements());
     for (Index e = 0; e < mesh.num_elements(); ++e) {
         int parity = 0;
-        for (int d = 0; d < mesh.dim(); ++d)
-            parity += periodic_index(c(e, d) - origin[d], size, 2);
+        for (int d = 0; d < mesh.dim(); ++d) parity += periodic_index(c(e, d) - origin[d], size, 2);
         mesh.material_ids[e] = parity % 2 == 0 ? a : b;
     }
 }
@@ -95,8 +94,8 @@ std::map<int, Material> image_field(mesh::Mesh& mesh, const ImageField& options)
     int w = 0, h = 0, channels = 0;
     const std::unique_ptr<unsigned char, void (*)(void*)> pixels(
         stbi_load(options.file.c_str(), &w, &h, &channels, 0), stbi_image_free);
-    CG_VERIFY(pixels != nullptr, "image_field: cannot read '{}' as a PNG image: {}",
-              options.file, stbi_failure_reason());
+    CG_VERIFY(pixels != nullptr, "image_field: cannot read '{}' as a PNG image: {}", options.file,
+              stbi_failure_reason());
 
     // Grayscale intensity per pixel: gray (+alpha) as is; RGB(A) by Rec. 601 luminance
     // 0.299 R + 0.587 G + 0.114 B, rounded; alpha is ignored.
@@ -138,8 +137,8 @@ std::map<int, Material> image_field(mesh::Mesh& mesh, const ImageField& options)
 }
 
 void voxel_field(mesh::Mesh& mesh, const std::string& file, const Eigen::Vector3i& dims) {
-    CG_VERIFY((dims.array() >= 1).all(), "voxel_field '{}': dims {}x{}x{} must all be >= 1",
-              file, dims[0], dims[1], dims[2]);
+    CG_VERIFY((dims.array() >= 1).all(), "voxel_field '{}': dims {}x{}x{} must all be >= 1", file,
+              dims[0], dims[1], dims[2]);
     CG_VERIFY(mesh.dim() == 3 || dims[2] == 1,
               "voxel_field '{}': a 2D mesh needs dims[2] = 1, got {}", file, dims[2]);
     std::ifstream in(file, std::ios::binary);

@@ -31,9 +31,9 @@ material::ElementMaterials two_materials(mesh::Mesh& m) {
     const int dim = m.dim();
     material::layers(m, 0, 0.0, 0.5, {1, 2});
     return material::assign(
-        m, {{1, material::isotropic(dim, 100.0, 0.3, 2.0)},
-            {2, material::anisotropic(dim, 7.0 * test::random_spd_tensor(mandel_size(dim), 3),
-                                      0.5)}});
+        m,
+        {{1, material::isotropic(dim, 100.0, 0.3, 2.0)},
+         {2, material::anisotropic(dim, 7.0 * test::random_spd_tensor(mandel_size(dim), 3), 0.5)}});
 }
 
 /// Reference assembly: element by element into triplets, serial, through the public element
@@ -121,9 +121,9 @@ TEST_P(AssemblyTest, GridCacheAndMassTotals) {
     const material::ElementMaterials mats = two_materials(m);
     mesh::Mesh general = m;
     general.grid.reset();
-    EXPECT_LT(relative_difference(fem::stiffness_matrix(m, mats),
-                                  fem::stiffness_matrix(general, mats)),
-              1e-14);
+    EXPECT_LT(
+        relative_difference(fem::stiffness_matrix(m, mats), fem::stiffness_matrix(general, mats)),
+        1e-14);
     double total = 0;
     for (Index e = 0; e < m.num_elements(); ++e)
         total += mats.of(e).density * mesh::element_measure(m, e);
@@ -168,9 +168,9 @@ TEST(AssemblyParallel, MediumMeshesEqualSerialAssembly) {
             for (const bool shuffled : {false, true}) {
                 const int n = type == ElementType::Hex8 ? 18 : type == ElementType::Tet4 ? 14 : 100;
                 const int dim = mesh::element_dim(type);
-                mesh::Mesh m = mesh::make_grid(type, Eigen::VectorXd::Zero(dim),
-                                               Eigen::VectorXd::Ones(dim),
-                                               Eigen::VectorXi::Constant(dim, n));
+                mesh::Mesh m =
+                    mesh::make_grid(type, Eigen::VectorXd::Zero(dim), Eigen::VectorXd::Ones(dim),
+                                    Eigen::VectorXi::Constant(dim, n));
                 if (shuffled) shuffle_nodes(m, 4);
                 const material::ElementMaterials grid_mats = two_materials(m);
                 if (type == ElementType::Hex8) {
@@ -213,8 +213,8 @@ TEST(AssemblyErrors, MismatchedMaterials) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, AssemblyTest,
-                         ::testing::Values(ElementType::Tri3, ElementType::Quad4,
-                                           ElementType::Tet4, ElementType::Hex8),
+                         ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                           ElementType::Hex8),
                          [](const auto& param_info) {
                              return mesh::element_name(param_info.param);
                          });

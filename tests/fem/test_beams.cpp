@@ -22,14 +22,15 @@ TEST_P(SeriesBar, EndDisplacementIsTheSeriesCompliance) {
     const ElementType type = GetParam();
     const int dim = mesh::element_dim(type);
     const double L = 3.0, L1 = 1.0, E1 = 200.0, E2 = 5.0, sigma = 0.8;
-    mesh::Mesh m = dim == 2 ? mesh::make_grid(type, Eigen::Vector2d(0, 0),
-                                              Eigen::Vector2d(L, 0.5), Eigen::Vector2i(12, 3))
-                            : mesh::make_grid(type, Eigen::Vector3d(0, 0, 0),
-                                              Eigen::Vector3d(L, 0.5, 0.4), Eigen::Vector3i(12, 3, 2));
+    mesh::Mesh m = dim == 2
+                       ? mesh::make_grid(type, Eigen::Vector2d(0, 0), Eigen::Vector2d(L, 0.5),
+                                         Eigen::Vector2i(12, 3))
+                       : mesh::make_grid(type, Eigen::Vector3d(0, 0, 0),
+                                         Eigen::Vector3d(L, 0.5, 0.4), Eigen::Vector3i(12, 3, 2));
     material::layers(m, 0, 0.0, L1, {1, 2, 2});  // [0,1] -> 1, [1,3] -> 2
-    const material::ElementMaterials mats =
-        material::assign(m, {{1, material::isotropic(dim, E1, 0.0, 1.0)},
-                             {2, material::isotropic(dim, E2, 0.0, 1.0)}});
+    const material::ElementMaterials mats = material::assign(
+        m,
+        {{1, material::isotropic(dim, E1, 0.0, 1.0)}, {2, material::isotropic(dim, E2, 0.0, 1.0)}});
     const double area = dim == 2 ? 0.5 : 0.5 * 0.4;
 
     const mesh::Boundary b = mesh::boundary(m);
@@ -57,8 +58,8 @@ TEST_P(SeriesBar, EndDisplacementIsTheSeriesCompliance) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, SeriesBar,
-                         ::testing::Values(ElementType::Tri3, ElementType::Quad4,
-                                           ElementType::Tet4, ElementType::Hex8),
+                         ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                           ElementType::Hex8),
                          [](const auto& param_info) {
                              return mesh::element_name(param_info.param);
                          });
@@ -74,9 +75,8 @@ INSTANTIATE_TEST_SUITE_P(AllTypes, SeriesBar,
 TEST(Cantilever, TipDeflectionMatchesBeamTheory) {
     const double L = 20.0, h = 1.0, E = 1000.0, rho = 1.0, g = 1e-2;
     const int nx = 120, nh = 6;
-    const mesh::Mesh m =
-        mesh::make_grid(ElementType::Hex8, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(L, h, h),
-                        Eigen::Vector3i(nx, nh, nh));
+    const mesh::Mesh m = mesh::make_grid(ElementType::Hex8, Eigen::Vector3d(0, 0, 0),
+                                         Eigen::Vector3d(L, h, h), Eigen::Vector3i(nx, nh, nh));
     const material::ElementMaterials mats =
         material::uniform(m, material::isotropic(3, E, 0.0, rho));
     const Vector f = fem::gravity_load(m, mats, Eigen::Vector3d(0, 0, -g));

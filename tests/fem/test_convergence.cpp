@@ -24,7 +24,8 @@ struct Manufactured {
     explicit Manufactured(int d, double E, double nu) : dim(d), k(d, d), phi(d) {
         lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
         mu = E / (2 * (1 + nu));
-        const Matrix k3 = (Matrix(3, 3) << 1.0, 0.5, 0.3, 0.4, 1.0, -0.5, -0.3, 0.6, 1.0).finished();
+        const Matrix k3 =
+            (Matrix(3, 3) << 1.0, 0.5, 0.3, 0.4, 1.0, -0.5, -0.3, 0.6, 1.0).finished();
         k = M_PI * k3.topLeftCorner(d, d);
         phi = Eigen::Vector3d(0.3, 0.7, 1.1).head(d);
     }
@@ -68,8 +69,9 @@ Errors solve_manufactured(ElementType type, int n) {
     const int dim = mesh::element_dim(type);
     const double E = 1.0, nu = 0.3;
     const Manufactured exact(dim, E, nu);
-    const mesh::Mesh m = mesh::make_grid(type, Eigen::VectorXd::Zero(dim),
-                                         Eigen::VectorXd::Ones(dim), Eigen::VectorXi::Constant(dim, n));
+    const mesh::Mesh m =
+        mesh::make_grid(type, Eigen::VectorXd::Zero(dim), Eigen::VectorXd::Ones(dim),
+                        Eigen::VectorXi::Constant(dim, n));
     const material::Material mat = material::isotropic(dim, E, nu, 1.0);
     const material::ElementMaterials mats = material::uniform(m, mat);
     const test::Quadrature q = test::reference_quadrature(type, 4);
@@ -99,7 +101,8 @@ Errors solve_manufactured(ElementType type, int n) {
     for (Index e = 0; e < m.num_elements(); ++e) {
         const Matrix X = m.element_positions(e);
         Vector ue(npe * dim);
-        for (int a = 0; a < npe; ++a) ue.segment(dim * a, dim) = u.segment(dim * m.elements(e, a), dim);
+        for (int a = 0; a < npe; ++a)
+            ue.segment(dim * a, dim) = u.segment(dim * m.elements(e, a), dim);
         for (Index p = 0; p < q.points.rows(); ++p) {
             double detJ = 0;
             const Eigen::VectorXd xi = q.points.row(p).transpose();
@@ -154,12 +157,13 @@ TEST_P(ConvergenceSlow, ManufacturedSolutionConvergesAtTheOptimalRate) {
     EXPECT_LT(runs.back().l2, runs.front().l2);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    AllTypes, ConvergenceSlow,
-    ::testing::Values(ConvergenceCase{ElementType::Tri3, {8, 16, 32, 64}},
-                      ConvergenceCase{ElementType::Quad4, {8, 16, 32, 64}},
-                      ConvergenceCase{ElementType::Tet4, {4, 6, 8, 12}},
-                      ConvergenceCase{ElementType::Hex8, {4, 6, 8, 12}}),
-    [](const auto& param_info) { return mesh::element_name(param_info.param.type); });
+INSTANTIATE_TEST_SUITE_P(AllTypes, ConvergenceSlow,
+                         ::testing::Values(ConvergenceCase{ElementType::Tri3, {8, 16, 32, 64}},
+                                           ConvergenceCase{ElementType::Quad4, {8, 16, 32, 64}},
+                                           ConvergenceCase{ElementType::Tet4, {4, 6, 8, 12}},
+                                           ConvergenceCase{ElementType::Hex8, {4, 6, 8, 12}}),
+                         [](const auto& param_info) {
+                             return mesh::element_name(param_info.param.type);
+                         });
 
 }  // namespace

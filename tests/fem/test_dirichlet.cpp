@@ -48,7 +48,8 @@ TEST(Dirichlet, ReduceMatchesDenseEliminationAndExpandRestores) {
     const fem::ReducedSystem sys = fem::reduce(K, f, bc);
     ASSERT_EQ(sys.free_dofs.size(), n - 5);
     Vector ud = Vector::Zero(n);
-    for (std::size_t k = 0; k < bc.dofs.size(); ++k) ud[bc.dofs[k]] = bc.values[static_cast<Index>(k)];
+    for (std::size_t k = 0; k < bc.dofs.size(); ++k)
+        ud[bc.dofs[k]] = bc.values[static_cast<Index>(k)];
     const Vector full_rhs = f - dense * ud;
     const Matrix Kff(sys.K);
     for (Index a = 0; a < sys.free_dofs.size(); ++a) {

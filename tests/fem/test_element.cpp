@@ -15,13 +15,15 @@ namespace {
 /// Reference corners of each element type (orderings of ElementType).
 Matrix reference_corners(ElementType type) {
     switch (type) {
-        case ElementType::Tri3: return (Matrix(3, 2) << 0, 0, 1, 0, 0, 1).finished();
-        case ElementType::Quad4: return (Matrix(4, 2) << 0, 0, 1, 0, 1, 1, 0, 1).finished();
+        case ElementType::Tri3:
+            return (Matrix(3, 2) << 0, 0, 1, 0, 0, 1).finished();
+        case ElementType::Quad4:
+            return (Matrix(4, 2) << 0, 0, 1, 0, 1, 1, 0, 1).finished();
         case ElementType::Tet4:
             return (Matrix(4, 3) << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1).finished();
         case ElementType::Hex8:
-            return (Matrix(8, 3) << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1,
-                    1, 0, 1, 1)
+            return (Matrix(8, 3) << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1,
+                    0, 1, 1)
                 .finished();
     }
     return {};
@@ -186,8 +188,7 @@ TEST_P(ElementTest, MassSumsToTheElementMass) {
             EXPECT_NEAR(total, mass, 1e-13 * mass);
             EXPECT_EQ(cross, 0.0);
         }
-        for (int a = 0; a < npe; ++a)
-            EXPECT_NEAR(M.row(dim * a).sum(), rho * w[a], 1e-13 * mass);
+        for (int a = 0; a < npe; ++a) EXPECT_NEAR(M.row(dim * a).sum(), rho * w[a], 1e-13 * mass);
         if (lumped) {
             EXPECT_EQ((M - Matrix(M.diagonal().asDiagonal())).norm(), 0.0);
         }
@@ -252,8 +253,8 @@ TEST(ElementErrors, InvertedAndWrongSizes) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, ElementTest,
-                         ::testing::Values(ElementType::Tri3, ElementType::Quad4,
-                                           ElementType::Tet4, ElementType::Hex8),
+                         ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                           ElementType::Hex8),
                          [](const auto& param_info) {
                              return mesh::element_name(param_info.param);
                          });

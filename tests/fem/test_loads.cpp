@@ -32,7 +32,8 @@ TEST_P(LoadTest, GravityIsMassTimesAcceleration) {
     const int dim = m.dim();
     material::layers(m, 0, 0.0, 0.5, {1, 2});
     const material::ElementMaterials mats = material::assign(
-        m, {{1, material::isotropic(dim, 1, 0.3, 3.0)}, {2, material::isotropic(dim, 1, 0.3, 0.5)}});
+        m,
+        {{1, material::isotropic(dim, 1, 0.3, 3.0)}, {2, material::isotropic(dim, 1, 0.3, 0.5)}});
     Eigen::VectorXd g = Eigen::VectorXd::LinSpaced(dim, -9.81, 2.0);
     const Vector f = fem::gravity_load(m, mats, g);
     Vector g_field(m.num_dofs());
@@ -50,8 +51,8 @@ TEST_P(LoadTest, GravityIsMassTimesAcceleration) {
     EXPECT_THROW(fem::gravity_load(m, mats, Eigen::VectorXd::Zero(dim + 1)), Error);
 }
 
-// Traction on the x = max face (mesh::boundary, facets_in_box): the nodal forces sum to t times the face
-// area, and on a regular grid each facet gives t * area / (nodes per facet) to each of its
+// Traction on the x = max face (mesh::boundary, facets_in_box): the nodal forces sum to t times the
+// face area, and on a regular grid each facet gives t * area / (nodes per facet) to each of its
 // nodes: corner nodes of a 2D edge get t h / 2, interior nodes t h (1e-14 relative).
 TEST_P(LoadTest, TractionSumsToTractionTimesArea) {
     const mesh::Mesh m = box_grid(GetParam());
@@ -101,8 +102,8 @@ TEST(TractionLoad, TrapezoidalQuadFacet) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, LoadTest,
-                         ::testing::Values(ElementType::Tri3, ElementType::Quad4,
-                                           ElementType::Tet4, ElementType::Hex8),
+                         ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                           ElementType::Hex8),
                          [](const auto& param_info) {
                              return mesh::element_name(param_info.param);
                          });

@@ -9,8 +9,8 @@
 #include "test_util.hpp"
 
 using namespace coarsegrain;
-using mesh::ElementType;
 using material::PlaneMode;
+using mesh::ElementType;
 
 namespace {
 
@@ -59,8 +59,8 @@ TEST_P(StressTest, UniformStrainGivesCEpsInEveryElement) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, StressTest,
-                         ::testing::Values(ElementType::Tri3, ElementType::Quad4,
-                                           ElementType::Tet4, ElementType::Hex8),
+                         ::testing::Values(ElementType::Tri3, ElementType::Quad4, ElementType::Tet4,
+                                           ElementType::Hex8),
                          [](const auto& param_info) {
                              return mesh::element_name(param_info.param);
                          });
@@ -95,9 +95,9 @@ TEST(VonMises, ClosedFormStressStates) {
                 std::sqrt(3.0) * tau, 1e-12);
 
     const Matrix uniaxial2 = Eigen::Vector2d(1, -nu).asDiagonal() * (sigma / E);
-    EXPECT_NEAR(
-        von_mises(ElementType::Quad4, material::isotropic(2, E, nu, 1, PlaneMode::Stress), uniaxial2),
-        std::abs(sigma), 1e-12);
+    EXPECT_NEAR(von_mises(ElementType::Quad4, material::isotropic(2, E, nu, 1, PlaneMode::Stress),
+                          uniaxial2),
+                std::abs(sigma), 1e-12);
     const double e11 = 1e-2;
     const Matrix stretch = (Matrix(2, 2) << e11, 0, 0, 0).finished();
     EXPECT_NEAR(von_mises(ElementType::Tri3, material::isotropic(2, E, nu, 1), stretch),

@@ -167,8 +167,11 @@ TEST(Assign, MapsIdsAndNamesTheMissingOne) {
     EXPECT_EQ(mats.of(0).E, 2.0);
     EXPECT_EQ(mats.of(1).E, 1.0);
     m.material_ids << 7, 5, 5, 5;
-    expect_error([&] { material::assign(m, {{3, a}, {7, b}}); },
-                 "material id 5 is used by 3 element(s) but has no material (defined ids: 3, 7)");
+    expect_error(
+        [&] {
+            material::assign(m, {{3, a}, {7, b}});
+        },
+        "material id 5 is used by 3 element(s) but has no material (defined ids: 3, 7)");
 
     const material::ElementMaterials u = material::uniform(m, a);
     EXPECT_EQ(u.size(), 4);

@@ -155,10 +155,12 @@ TEST(VoxelField, RoundTripAndResampling) {
     std::vector<unsigned char> bytes;
     for (int k = 0; k < 2; ++k)
         for (int j = 0; j < 2; ++j)
-            for (int i = 0; i < 3; ++i) bytes.push_back(static_cast<unsigned char>(10 + i + 3 * j + 6 * k));
+            for (int i = 0; i < 3; ++i)
+                bytes.push_back(static_cast<unsigned char>(10 + i + 3 * j + 6 * k));
     const std::string file = test::temp_dir("voxel_field") + "/labels.raw";
     std::ofstream(file, std::ios::binary)
-        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+        .write(reinterpret_cast<const char*>(bytes.data()),
+               static_cast<std::streamsize>(bytes.size()));
     mesh::Mesh m = grid3(3, 2, 2);
     material::voxel_field(m, file, dims);
     for (Index e = 0; e < m.num_elements(); ++e) EXPECT_EQ(m.material_ids[e], bytes[e]);

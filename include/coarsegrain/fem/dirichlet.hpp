@@ -22,9 +22,9 @@ struct Dirichlet {
 
 /// The system restricted to the free DOFs: K_ff u_f = f_f - K_fd u_d.
 struct ReducedSystem {
-    SparseMatrix K;        ///< free by free block
-    Vector rhs;            ///< f_f - K_fd u_d
-    IndexVector free_dofs; ///< reduced index -> full DOF
+    SparseMatrix K;         ///< free by free block
+    Vector rhs;             ///< f_f - K_fd u_d
+    IndexVector free_dofs;  ///< reduced index -> full DOF
 };
 
 /// Eliminates the Dirichlet DOFs from K u = f in O(nnz(K)): K_ff is copied column by column

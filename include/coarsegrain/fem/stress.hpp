@@ -6,8 +6,8 @@
 namespace coarsegrain::fem {
 
 struct ElementStress {
-    Matrix strain;     ///< #E by mandel_size(dim), Mandel
-    Matrix stress;     ///< #E by mandel_size(dim), Mandel
+    Matrix strain;  ///< #E by mandel_size(dim), Mandel
+    Matrix stress;  ///< #E by mandel_size(dim), Mandel
     /// #E von Mises stress of the full 3D stress. In 2D the out-of-plane stress enters:
     /// plane strain sigma_zz = lambda (e11 + e22) (= C_zz11 e11 + C_zz22 e22 of the 3D isotropic
     /// tensor, from the material's E and nu), plane stress sigma_zz = 0. Anisotropic 2D

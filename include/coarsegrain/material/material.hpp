@@ -9,7 +9,8 @@
 
 namespace coarsegrain::material {
 
-/// How a 2D problem relates to 3D: plane strain (default, eps_zz = 0) or plane stress (sigma_zz = 0).
+/// How a 2D problem relates to 3D: plane strain (default, eps_zz = 0) or plane stress
+/// (sigma_zz = 0).
 enum class PlaneMode { Strain, Stress };
 
 /// A linear-elastic material.
