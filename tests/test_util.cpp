@@ -1,6 +1,7 @@
 #include "test_util.hpp"
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -59,7 +60,9 @@ void distort_interior(mesh::Mesh& mesh, double amount, unsigned seed) {
 
 std::string temp_dir(const std::string& name) {
     namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / "coarsegrain_tests" / name;
+    // ctest runs tests in parallel processes; the process id keeps their folders apart.
+    const fs::path dir =
+        fs::temp_directory_path() / "coarsegrain_tests" / std::to_string(::getpid()) / name;
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir.string();

@@ -18,7 +18,7 @@ Vector linear_field(const Matrix& X, const Matrix& A, const Eigen::VectorXd& b);
 /// spacing (fixed seed), keeping elements valid. Boundary nodes stay put.
 void distort_interior(mesh::Mesh& mesh, double amount, unsigned seed = 1);
 
-/// A fresh empty temporary folder for one test (removed at the start of the next run).
+/// A fresh empty temporary folder for one test, private to this process.
 std::string temp_dir(const std::string& name);
 
 /// Runs a shell command, returns its exit code; stdout+stderr go to `output` if non-null.

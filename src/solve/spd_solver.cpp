@@ -3,7 +3,11 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
+#include <dlfcn.h>
+
 #include <cmath>
+#include <cstdlib>
+#include <mutex>
 #include <cstdint>
 #include <random>
 
@@ -198,7 +202,28 @@ struct SpdSolver::Impl {
     }
 };
 
+namespace {
+
+// CHOLMOD's supernodal kernels call BLAS. A multi-threaded BLAS busy-waits for its workers: with
+// every core already busy (ctest -j, a second job) the 56K-DOF demo factorized in 24-49 s with
+// 2 BLAS threads against 4.7 s with one, and on an idle 2-core machine one thread was as fast
+// (2.0 s vs 2.0-2.2 s). So unless the user sets OPENBLAS_NUM_THREADS, OpenBLAS runs on one
+// thread; coarsegrain's own parallelism is OpenMP over elements and nodes. Other BLAS
+// libraries (no openblas_set_num_threads symbol) are left alone.
+void limit_blas_threads() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        if (std::getenv("OPENBLAS_NUM_THREADS")) return;
+        using SetThreads = void (*)(int);
+        if (auto set = reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
+            set(1);
+    });
+}
+
+}  // namespace
+
 SpdSolver::SpdSolver(SolverOptions options) : m_impl(std::make_unique<Impl>()) {
+    limit_blas_threads();
     CG_VERIFY(options.cg_tolerance > 0 && options.cg_tolerance < 1,
               "solver: cg_tolerance = {} must be in (0, 1)", options.cg_tolerance);
     CG_VERIFY(options.cg_max_iterations >= 0,
