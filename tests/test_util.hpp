@@ -1,6 +1,10 @@
 #pragma once
 /// @file Helpers shared by the tests.
+#include <gtest/gtest.h>
+
 #include <string>
+
+#include "coarsegrain/common/error.hpp"
 
 #include "coarsegrain/common/types.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
@@ -23,5 +27,17 @@ std::string temp_dir(const std::string& name);
 
 /// Runs a shell command, returns its exit code; stdout+stderr go to `output` if non-null.
 int run(const std::string& command, std::string* output = nullptr);
+
+/// Runs f and expects a coarsegrain::Error whose message contains `text`.
+template <class F>
+void expect_error(F&& f, const std::string& text) {
+    try {
+        f();
+        ADD_FAILURE() << "no error, expected one containing: " << text;
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(text), std::string::npos)
+            << "message: " << e.what() << "\nexpected to contain: " << text;
+    }
+}
 
 }  // namespace coarsegrain::test

@@ -133,6 +133,17 @@ class GmshReader {
     }
 
   private:
+    /// The Gmsh element type `number` on the current line; an unknown number is a read error.
+    const GmshType* known_type(std::int64_t number) {
+        const GmshType* type = gmsh_type(number);
+        if (!type)
+            m_in.fail(
+                "unknown Gmsh element type {} (coarsegrain reads 2 triangle, 3 quad, "
+                "4 tetrahedron, 5 hexahedron)",
+                number);
+        return type;
+    }
+
     void read_format() {
         m_in.require_line("the format line 'version file-type data-size'");
         if (m_in.num_fields() >= 2 && m_in.field(1) == "1")
@@ -217,12 +228,7 @@ class GmshReader {
             need_fields(3, "an element line 'number type #tags tags... nodes...'");
             m_in.integer(m_in.field(0), "an element number");
             const std::int64_t number = m_in.integer(m_in.field(1), "an element type");
-            const GmshType* type = gmsh_type(number);
-            if (!type)
-                m_in.fail(
-                    "unknown Gmsh element type {} (coarsegrain reads 2 triangle, 3 quad, "
-                    "4 tetrahedron, 5 hexahedron)",
-                    number);
+            const GmshType* type = known_type(number);
             const Index num_tags = m_in.count(m_in.field(2), "the number of tags");
             m_in.expect_fields(3 + static_cast<std::size_t>(num_tags) + type->nodes,
                                "an element line 'number type #tags tags... nodes...'");
@@ -343,12 +349,7 @@ class GmshReader {
                 "an element block header 'entityDim entityTag elementType "
                 "numElementsInBlock'",
                 dim, tag, number, count);
-            const GmshType* type = gmsh_type(number);
-            if (!type)
-                m_in.fail(
-                    "unknown Gmsh element type {} (coarsegrain reads 2 triangle, 3 quad, "
-                    "4 tetrahedron, 5 hexahedron)",
-                    number);
+            const GmshType* type = known_type(number);
             if (count > n - read)
                 m_in.fail("the block holds {} elements, but only {} of the {} announced remain",
                           count, n - read, n);

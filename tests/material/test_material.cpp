@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include "test_util.hpp"
+
 #include <cmath>
 #include <random>
 
@@ -8,21 +10,11 @@
 #include "coarsegrain/mesh/grid.hpp"
 
 using namespace coarsegrain;
+using test::expect_error;
 using material::PlaneMode;
 
 namespace {
 
-/// Runs f, expects coarsegrain::Error whose message contains `text`.
-template <class F>
-void expect_error(F&& f, const std::string& text) {
-    try {
-        f();
-        ADD_FAILURE() << "no error, expected one containing: " << text;
-    } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find(text), std::string::npos)
-            << "message: " << e.what() << "\nexpected to contain: " << text;
-    }
-}
 
 const int kPlane[3] = {0, 1, 5};  // the (11, 22, 12) rows of the 3D Mandel tensor
 

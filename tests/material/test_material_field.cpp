@@ -12,6 +12,7 @@
 #include "test_util.hpp"
 
 using namespace coarsegrain;
+using test::expect_error;
 using mesh::ElementType;
 
 namespace {
@@ -26,16 +27,6 @@ mesh::Mesh grid3(int nx, int ny, int nz) {
                            Eigen::Vector3i(nx, ny, nz));
 }
 
-template <class F>
-void expect_error(F&& f, const std::string& text) {
-    try {
-        f();
-        ADD_FAILURE() << "no error, expected one containing: " << text;
-    } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find(text), std::string::npos)
-            << "message: " << e.what() << "\nexpected to contain: " << text;
-    }
-}
 
 /// Writes a w x h PNG with `channels` channels; pixel(row, col, channel) gives the bytes.
 template <class F>
