@@ -11,6 +11,12 @@ case "$flavour" in
                                   -DCOARSEGRAIN_BUILD_BENCH=OFF) ;;
   *) echo "usage: scripts/build.sh [release|asan] [targets...]" >&2; exit 2 ;;
 esac
+# ccache (installed by setup.sh) makes rebuilds in fresh clones and git worktrees cheap;
+# CCACHE_BASEDIR lets checkouts in different folders share hits.
+if command -v ccache >/dev/null; then
+  flags+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
+fi
 if [ ! -f "$dir/build.ninja" ]; then
   cmake -S . -B "$dir" -G Ninja "${flags[@]}" >/dev/null
 fi
