@@ -189,6 +189,7 @@ std::vector<BoxCondition> parse_box_conditions(const JsonReader& r, int dim, boo
 Scene parse_scene(const json& j, const std::string& source, const std::string& base_dir) {
     Scene s;
     s.source = source;
+    s.base_dir = base_dir;
     const JsonReader root(j, "", s.source);
     root.require_object();
     root.allow_only({"description", "dimension", "mesh", "materials", "material_field", "plane",
@@ -248,7 +249,17 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
         }
         if (auto t = sv->find("tolerance")) s.solver.cg_tolerance = t->positive();
     }
-    if (auto c = root.find("coarse")) s.coarse = c->json();
+    if (auto c = root.find("coarse")) {
+        // One list for every method, so a scene can be coarsened by each of them; each method
+        // validates the values of its own keys (docs/guide.md "coarse").
+        c->allow_only(kCoarseKeys);
+        s.coarse = c->json();
+        if (auto m = c->find("mesh")) {
+            s.coarse_mesh = parse_mesh(*m, dim, base_dir);
+            m->fail_unless(s.coarse_mesh->dim() == dim, "the coarse mesh is {}D, the scene {}D",
+                           s.coarse_mesh->dim(), dim);
+        }
+    }
     return s;
 }
 

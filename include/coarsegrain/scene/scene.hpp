@@ -4,7 +4,9 @@
 /// Every key is validated where it is read; errors are InvalidScene naming the file and the
 /// JSON key (e.g. "beam.json: dirichlet[1].box.min: expected 3 numbers, got 2"). Unknown keys
 /// are rejected so a typo never silently changes a simulation.
+#include <initializer_list>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,9 +44,19 @@ struct Scene {
     std::vector<BoxCondition> traction;
     std::vector<Eigen::VectorXd> probes;
     solve::SolverOptions solver;
-    /// The "coarse" block as given; read by the coarsening commands.
+    /// The "coarse" block as given (its keys checked against kCoarseKeys); each coarsening
+    /// method reads and validates its own options from it.
     nlohmann::json coarse;
+    /// coarse.mesh, read like "mesh" (effective-tensor family); material ids are ignored.
+    std::optional<mesh::Mesh> coarse_mesh;
+    /// Folder that relative file names in the scene are resolved against.
+    std::string base_dir;
 };
+
+/// Every key the "coarse" block may hold, over all methods.
+inline constexpr std::initializer_list<const char*> kCoarseKeys = {
+    "mesh",       "normals",    "boundary", "map",        "levels",    "refinement",
+    "radius",     "radius_grid", "truncation", "invariance", "dirichlet"};
 
 /// Reads and validates a scene file; relative file names inside are relative to its folder.
 /// @throws InvalidScene / MeshReadError / Error naming the file and key
