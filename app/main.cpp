@@ -37,7 +37,8 @@ int main(int argc, char** argv) {
     solve->add_option("scene", scene_file, "scene file (JSON)")->required();
     solve->add_option("--out", out_dir, "output folder")->capture_default_str();
     CLI::App* demo = app.add_subcommand(
-        "demo", "the built-in scene: a layered beam (stiff/soft, contrast 1000) hung under gravity");
+        "demo",
+        "the built-in scene: a layered beam (stiff/soft, contrast 1000) hung under gravity");
     demo->add_option("--out", demo_out, "output folder")->capture_default_str();
     demo->add_option("--scale", demo_scale, "grid resolution factor (1 = 64x16x16 hexes)")
         ->check(CLI::Range(0.05, 4.0))
@@ -58,11 +59,14 @@ int main(int argc, char** argv) {
         const auto start = std::chrono::steady_clock::now();
         if (*solve) {
             const cg::scene::Scene sc = cg::scene::load_scene(scene_file);
-            const double read = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double read =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             cg::app::run_solve(sc, out_dir, "solve", read);
         } else if (*demo) {
-            const cg::scene::Scene sc = cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
-            const double read = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const cg::scene::Scene sc =
+                cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
+            const double read =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             cg::app::run_solve(sc, demo_out, "demo", read);
         }
     } catch (const cg::Error& e) {

@@ -1,0 +1,83 @@
+#include "output.hpp"
+
+#include <sys/resource.h>
+
+#include <filesystem>
+
+#include "coarsegrain/fem/stress.hpp"
+#include "coarsegrain/io/file_util.hpp"
+
+namespace coarsegrain::app {
+
+namespace {
+
+// Physical (not Mandel-scaled) tensor components for ParaView.
+Matrix mandel_to_physical(const Matrix& m) {
+    Matrix out = m;
+    const int n = static_cast<int>(m.cols());
+    const int first_shear = n == 6 ? 3 : 2;
+    out.rightCols(n - first_shear) *= kInvSqrt2;
+    return out;
+}
+
+}  // namespace
+
+double peak_rss_mb() {
+    rusage r{};
+    getrusage(RUSAGE_SELF, &r);
+    return static_cast<double>(r.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+std::vector<double> to_std(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+Vector nodal_magnitude(const Vector& u, int dim) {
+    return Eigen::Map<const Matrix>(u.data(), dim, u.size() / dim).colwise().norm().transpose();
+}
+
+nlohmann::json timings_json(const Timings& timings) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& [phase, seconds] : timings.entries()) j[phase] = seconds;
+    return j;
+}
+
+io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u) {
+    const int dim = model.mesh.dim();
+    const fem::ElementStress stress = fem::element_stress(model.mesh, model.materials, u);
+    io::VtuFields fields;
+    fields.add_point_vector("displacement", u, dim);
+    fields.add_point_scalar("displacement_magnitude", nodal_magnitude(u, dim));
+    Vector E(model.mesh.num_elements());
+    for (Index e = 0; e < model.mesh.num_elements(); ++e) E[e] = model.materials.of(e).E;
+    fields.add_cell_scalar("E", E);
+    fields.add_cell("stress", mandel_to_physical(stress.stress));
+    fields.add_cell("strain", mandel_to_physical(stress.strain));
+    fields.add_cell_scalar("von_mises", stress.von_mises);
+    return fields;
+}
+
+nlohmann::json fine_sizes(const scene::FineModel& model) {
+    return {{"nodes", model.mesh.num_nodes()},
+            {"elements", model.mesh.num_elements()},
+            {"element", mesh::element_name(model.mesh.type)},
+            {"dofs", model.mesh.num_dofs()},
+            {"free_dofs", model.mesh.num_dofs() - static_cast<Index>(model.bc.dofs.size())},
+            {"nonzeros", model.K.nonZeros()}};
+}
+
+nlohmann::json probes_json(const scene::Scene& scene, const std::vector<Eigen::VectorXd>& u,
+                           const std::vector<Eigen::VectorXd>* fine) {
+    nlohmann::json j = nlohmann::json::array();
+    for (std::size_t i = 0; i < u.size(); ++i) {
+        nlohmann::json p = {{"point", to_std(scene.probes[i])}, {"u", to_std(u[i])}};
+        if (fine) p["u_fine"] = to_std((*fine)[i]);
+        j.push_back(p);
+    }
+    return j;
+}
+
+void write_summary(const std::string& out_dir, const nlohmann::json& summary) {
+    io::write_atomically((std::filesystem::path(out_dir) / "summary.json").string(),
+                         [&](std::ostream& os) { os << summary.dump(2) << '\n'; });
+}
+
+}  // namespace coarsegrain::app

@@ -1,0 +1,38 @@
+#pragma once
+/// Pieces shared by the commands' outputs: summary.json figures and the solution VTU fields.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "coarsegrain/common/progress.hpp"
+#include "coarsegrain/io/vtu.hpp"
+#include "coarsegrain/scene/scene.hpp"
+
+namespace coarsegrain::app {
+
+/// Peak resident memory of this process in MB.
+double peak_rss_mb();
+
+std::vector<double> to_std(const Eigen::VectorXd& v);
+
+/// Per-node |u| of an interleaved displacement.
+Vector nodal_magnitude(const Vector& u, int dim);
+
+/// {"phase": seconds, ...} in the order the phases ran.
+nlohmann::json timings_json(const Timings& timings);
+
+/// Displacement, its magnitude, E, stress and strain (physical components: xx yy zz yz xz xy,
+/// or xx yy xy in 2D) and von Mises stress of a fine-mesh displacement.
+io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u);
+
+/// The fine static problem's sizes for summary.json "fine".
+nlohmann::json fine_sizes(const scene::FineModel& model);
+
+/// [{"point": [...], "u": [...]}, ...]; with `fine` given, also "u_fine" beside each "u".
+nlohmann::json probes_json(const scene::Scene& scene, const std::vector<Eigen::VectorXd>& u,
+                           const std::vector<Eigen::VectorXd>* fine = nullptr);
+
+/// Writes DIR/summary.json atomically.
+void write_summary(const std::string& out_dir, const nlohmann::json& summary);
+
+}  // namespace coarsegrain::app

@@ -1,0 +1,44 @@
+#pragma once
+/// @file The one runtime for every coarse model: a static solve on the coarse DOFs, carried to the
+/// fine mesh, and its comparison with the fine solution (DESIGN.md "summary.json").
+#include <string>
+#include <vector>
+
+#include "coarsegrain/coarsen/coarse_model.hpp"
+
+namespace coarsegrain::coarsen {
+
+/// A coarse static solution.
+struct CoarseSolution {
+    Vector u;       ///< coarse DOFs, Dirichlet values included
+    Vector u_fine;  ///< to_fine * u: the coarse solution on the fine nodes
+};
+
+/// Solves K u = f on the coarse DOFs with model.bc eliminated and maps u to the fine nodes.
+/// Phases "factorize" and "solve" go to `timings`.
+/// @throws Error if the model's sizes disagree; NotPositiveDefinite if it does not hold
+CoarseSolution solve_static(const CoarseModel& model, const solve::SolverOptions& options,
+                            Timings* timings = nullptr);
+
+/// How far a coarse solution carried to the fine mesh, u_c, is from the fine solution u.
+struct Errors {
+    double energy_rel = 0;            ///< ||u_c - u||_K / ||u||_K, K the fine stiffness
+    double energy_over_load = 0;      ///< ||u_c - u||_K / ||g||_2 (Chen 2019, Fig. 9, Table 1)
+    double l2_rel = 0;                ///< |u_c - u|_2 / |u|_2 over the fine nodes
+    double max_displacement_rel = 0;  ///< |max_i |u_c,i| - max_i |u_i|| / max_i |u_i|
+    double compliance_ratio = 0;      ///< f.u_c / f.u: 1 is perfect, below 1 too stiff
+};
+
+/// Compares u_c with u on the fine model (both full fine DOF vectors).
+/// @throws Error if sizes disagree or the fine solution is zero
+Errors compare(const scene::FineModel& fine, const Vector& u, const Vector& u_c);
+
+/// Names of the methods `build_coarse_model` knows, in the order reports list them.
+const std::vector<std::string>& method_names();
+
+/// Builds the coarse model of `method` (one of method_names()) from the scene's "coarse" block.
+/// @throws InvalidScene naming the key if an option is invalid or missing for that method
+CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
+                               const std::string& method);
+
+}  // namespace coarsegrain::coarsen

@@ -1,0 +1,61 @@
+#include "coarsegrain/coarsen/runtime.hpp"
+
+#include "coarsegrain/common/error.hpp"
+#include "coarsegrain/fem/dirichlet.hpp"
+
+namespace coarsegrain::coarsen {
+
+namespace {
+
+double max_nodal_norm(const Vector& u, int dim) {
+    return Eigen::Map<const Matrix>(u.data(), dim, u.size() / dim).colwise().norm().maxCoeff();
+}
+
+double energy_norm(const SparseMatrix& K, const Vector& v) {
+    return std::sqrt(std::max(0.0, v.dot(K * v)));
+}
+
+}  // namespace
+
+CoarseSolution solve_static(const CoarseModel& model, const solve::SolverOptions& options,
+                            Timings* timings) {
+    const Index n = model.K.rows();
+    CG_VERIFY(model.K.cols() == n && model.f.size() == n && model.to_fine.cols() == n,
+              "coarse model {}: K is {}x{}, f has {} entries, to_fine has {} columns", model.method,
+              model.K.rows(), model.K.cols(), model.f.size(), model.to_fine.cols());
+    const fem::ReducedSystem sys = fem::reduce(model.K, model.f, model.bc);
+    solve::SpdSolver solver(options);
+    {
+        const Phase phase("factorize", timings);
+        solver.compute(sys.K);
+    }
+    CoarseSolution s;
+    {
+        const Phase phase("solve", timings);
+        s.u = fem::expand(sys, solver.solve(sys.rhs), model.bc, n);
+    }
+    s.u_fine = model.to_fine * s.u;
+    return s;
+}
+
+Errors compare(const scene::FineModel& fine, const Vector& u, const Vector& u_c) {
+    const Index n = fine.mesh.num_dofs();
+    CG_VERIFY(u.size() == n && u_c.size() == n,
+              "compare: the fine model has {} DOFs, the solutions {} and {}", n, u.size(),
+              u_c.size());
+    const int dim = fine.mesh.dim();
+    const double u_norm = u.norm(), u_energy = energy_norm(fine.K, u);
+    const double u_max = max_nodal_norm(u, dim), compliance = fine.f.dot(u);
+    CG_VERIFY(u_norm > 0 && u_energy > 0 && compliance != 0,
+              "compare: the fine solution is zero (no load?)");
+    const Vector e = u_c - u;
+    Errors r;
+    r.energy_rel = energy_norm(fine.K, e) / u_energy;
+    r.energy_over_load = energy_norm(fine.K, e) / fine.f.norm();
+    r.l2_rel = e.norm() / u_norm;
+    r.max_displacement_rel = std::abs(max_nodal_norm(u_c, dim) - u_max) / u_max;
+    r.compliance_ratio = fine.f.dot(u_c) / compliance;
+    return r;
+}
+
+}  // namespace coarsegrain::coarsen
