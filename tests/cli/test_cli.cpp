@@ -4,59 +4,17 @@
 
 #include <filesystem>
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 
+#include "cli/cli_test_util.hpp"
 #include "coarsegrain/io/vtu.hpp"
-#include "test_util.hpp"
 
 using namespace coarsegrain;
 using nlohmann::json;
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
 
-namespace {
-
-const std::string kCli = COARSEGRAIN_CLI;
-
-// A small valid 3D scene: a 2x1x1 two-material bar clamped at x = 0, gravity and end traction.
-json small_scene() {
-    return json::parse(R"({
-      "dimension": 3,
-      "mesh": { "grid": { "min": [0,0,0], "max": [2,1,1], "cells": [8,4,4], "element": "hex" } },
-      "material_field": { "layers": { "axis": "x", "thickness": 0.5, "ids": [1, 2] } },
-      "materials": { "1": { "E": 1000, "nu": 0.3, "density": 1 },
-                     "2": { "E": 10, "nu": 0.45, "density": 2 } },
-      "dirichlet": [ { "box": { "min": [-1e-9,-1,-1], "max": [1e-9,2,2] } } ],
-      "loads": { "gravity": [0,0,-1],
-                 "traction": [ { "box": { "min": [2,-1,-1], "max": [2,2,2] }, "value": [0,0,-0.1] } ] },
-      "probes": [ [2,0.5,0.5], [1,0.5,0.5] ]
-    })");
-}
-
-std::string write_scene(const std::string& dir, const json& j, const std::string& name = "scene.json") {
-    const std::string file = dir + "/" + name;
-    std::ofstream(file) << j.dump(2);
-    return file;
-}
-
-json read_json(const std::string& file) {
-    std::ifstream in(file);
-    return json::parse(in);
-}
-
-struct Result {
-    int code;
-    std::string output;
-};
-
-Result cli(const std::string& args) {
-    Result r;
-    r.code = test::run(kCli + " --quiet " + args, &r.output);
-    return r;
-}
-
-}  // namespace
+using namespace coarsegrain::test;
 
 TEST(Cli, SolveWritesSummaryAndVtuWithTheContractKeys) {
     const std::string dir = test::temp_dir("cli_solve");
@@ -141,30 +99,48 @@ TEST_P(CliBadScene, FailsWithOneClearMessageAndNoOutput) {
 INSTANTIATE_TEST_SUITE_P(
     Cases, CliBadScene,
     ::testing::Values(
-        BadScene{"unknown_key", [](json& j) { j["gravity"] = {0, 0, 1}; },
+        BadScene{"unknown_key",
+                 [](json& j) {
+                     j["gravity"] = {0, 0, 1};
+                 },
                  "gravity: unknown key"},
-        BadScene{"missing_material", [](json& j) { j["materials"].erase("2"); },
-                 "material id 2"},
+        BadScene{"missing_material", [](json& j) { j["materials"].erase("2"); }, "material id 2"},
         BadScene{"bad_nu", [](json& j) { j["materials"]["1"]["nu"] = 0.5; }, "materials.1"},
         BadScene{"negative_E", [](json& j) { j["materials"]["1"]["E"] = -1; }, "materials.1"},
         BadScene{"empty_dirichlet_box",
-                 [](json& j) { j["dirichlet"][0]["box"]["min"] = {5, 5, 5};
-                               j["dirichlet"][0]["box"]["max"] = {6, 6, 6}; },
+                 [](json& j) {
+                     j["dirichlet"][0]["box"]["min"] = {5, 5, 5};
+                     j["dirichlet"][0]["box"]["max"] = {6, 6, 6};
+                 },
                  "dirichlet[0].box selects no node"},
         BadScene{"empty_traction_box",
-                 [](json& j) { j["loads"]["traction"][0]["box"]["min"] = {0.5, 0.2, 0.2};
-                               j["loads"]["traction"][0]["box"]["max"] = {0.6, 0.3, 0.3}; },
+                 [](json& j) {
+                     j["loads"]["traction"][0]["box"]["min"] = {0.5, 0.2, 0.2};
+                     j["loads"]["traction"][0]["box"]["max"] = {0.6, 0.3, 0.3};
+                 },
                  "traction[0].box selects no boundary face"},
         BadScene{"singular", [](json& j) { j.erase("dirichlet"); }, "not positive definite"},
-        BadScene{"short_vector", [](json& j) { j["loads"]["gravity"] = {0, -1}; },
+        BadScene{"short_vector",
+                 [](json& j) {
+                     j["loads"]["gravity"] = {0, -1};
+                 },
                  "loads.gravity: expected 3 numbers"},
-        BadScene{"probe_outside", [](json& j) { j["probes"] = {{9, 9, 9}}; },
+        BadScene{"probe_outside",
+                 [](json& j) {
+                     j["probes"] = {{9, 9, 9}};
+                 },
                  "probes[0]"},
-        BadScene{"missing_mesh_file", [](json& j) { j["mesh"] = {{"file", "nope.msh"}}; },
+        BadScene{"missing_mesh_file",
+                 [](json& j) {
+                     j["mesh"] = {{"file", "nope.msh"}};
+                 },
                  "nope.msh"},
         BadScene{"bad_element", [](json& j) { j["mesh"]["grid"]["element"] = "prism"; },
                  "mesh.grid.element: unknown element"},
-        BadScene{"bad_backend", [](json& j) { j["solver"] = {{"backend", "magic"}}; },
+        BadScene{"bad_backend",
+                 [](json& j) {
+                     j["solver"] = {{"backend", "magic"}};
+                 },
                  "solver.backend"}),
     [](const auto& p) { return p.param.name; });
 
