@@ -13,13 +13,11 @@ namespace coarsegrain::mesh {
 namespace {
 
 /// A point within kOnPlane * H of a clipping plane lies on it (H: the larger bounding-box
-/// extent of the two simplices). Signed distances are computed in coordinates centred on the
-/// clipped simplex, from unit normals: their round-off is a few ulps of H (about 1e-15 H), so
-/// 1e-14 H absorbs it, while the snapping moves a measure by at most 1e-14 H times a facet.
+/// extent of the two simplices). Signed distances are computed from unit normals in coordinates
+/// centred on the clipped simplex; their round-off is a few ulps of H (the distance from the
+/// plane's base point), so 1e-14 H (about 45 ulps) absorbs it. Snapping moves a measure by at
+/// most 1e-14 H times a facet area, i.e. about 1e-14 H / h relative for a simplex of extent h.
 constexpr double kOnPlane = 1e-14;
-/// A clipped measure below kNegligible times the smaller simplex's measure is the round-off
-/// left of a lower-dimensional contact (edge or vertex), whose noise is O(1e-16) relative.
-constexpr double kNegligible = 1e-13;
 /// A simplex is degenerate when its measure is at most kDegenerate h^D (as mesh::validate).
 constexpr double kDegenerate = 1e-12;
 
@@ -30,12 +28,19 @@ using Corners = std::array<Vec<D>, D + 1>;
 
 constexpr double factorial(int d) { return d <= 1 ? 1.0 : d * factorial(d - 1); }
 
-/// A simplex with what clipping needs: positively oriented corners, the inward unit normal of
-/// each facet (facet i is opposite corner i), its measure and bounding-box extent.
+template <int D>
+bool lex_less(const Vec<D>& p, const Vec<D>& q) {
+    return std::lexicographical_compare(p.begin(), p.end(), q.begin(), q.end());
+}
+
+/// A simplex with what clipping needs: positively oriented corners, the plane of each facet
+/// (facet i is opposite corner i) as an inward unit normal and a point, its measure and
+/// bounding-box extent.
 template <int D>
 struct Simplex {
     Corners<D> x;
     Corners<D> normal;
+    Corners<D> base;
     double measure = 0;
     double extent = 0;
 
@@ -49,10 +54,7 @@ Simplex<D> make_simplex(const Corners<D>& corners) {
     Eigen::Matrix<double, D, D> T;  // edges from corner 0
     for (int k = 0; k < D; ++k) T.col(k) = s.x[k + 1] - s.x[0];
     const double det = T.determinant();
-    if (det < 0) {
-        std::swap(s.x[1], s.x[2]);
-        T.col(0).swap(T.col(1));
-    }
+    if (det < 0) std::swap(s.x[1], s.x[2]);
     s.measure = std::abs(det) / factorial(D);
     Vec<D> lo = s.x[0], hi = s.x[0];
     for (int k = 1; k <= D; ++k) {
@@ -60,12 +62,25 @@ Simplex<D> make_simplex(const Corners<D>& corners) {
         hi = hi.cwiseMax(s.x[k]);
     }
     s.extent = (hi - lo).maxCoeff();
-    // Row k of T^{-1} is the gradient of barycentric coordinate k+1, and the gradient of
-    // coordinate 0 is minus their sum: each points into the simplex, normal to its facet.
-    const Eigen::Matrix<double, D, D> G = T.inverse();
-    s.normal[0] = -G.colwise().sum().transpose();
-    for (int k = 0; k < D; ++k) s.normal[k + 1] = G.row(k).transpose();
-    for (auto& n : s.normal) n.normalize();
+    // Each facet plane comes from the facet's own corners in lexicographic order: through the
+    // first, normal to the edges from it, turned inward. Simplices that share a facet thus get
+    // the same plane to the last bit (up to an exact sign flip), so the pieces they cut from a
+    // third simplex fit together without slivers of round-off (and its accuracy does not
+    // depend on the shape of the rest of the simplex).
+    for (int i = 0; i <= D; ++i) {
+        std::array<Vec<D>, D> f;
+        for (int k = 0, j = 0; k <= D; ++k)
+            if (k != i) f[j++] = s.x[k];
+        std::sort(f.begin(), f.end(), lex_less<D>);
+        Vec<D> n;
+        if constexpr (D == 2)
+            n = Vec<2>(f[0].y() - f[1].y(), f[1].x() - f[0].x());
+        else
+            n = (f[1] - f[0]).cross(f[2] - f[0]);
+        n.normalize();
+        s.normal[i] = n.dot(s.x[i] - f[0]) < 0 ? Vec<D>(-n) : n;
+        s.base[i] = f[0];
+    }
     return s;
 }
 
@@ -93,10 +108,12 @@ std::pair<double, double> signed_distances(const std::array<Vec<D>, N>& points, 
     return {smin, smax};
 }
 
-/// The point where the segment from p (distance sp > 0) to q (distance sq < 0) crosses the plane.
+/// The point where the segment from p to q (signed distances sp, sq of opposite signs) crosses
+/// the plane. A convex combination, so accurate to round-off; and bit-identical when the ends
+/// are swapped or the plane is flipped, so neighbours cutting along a shared facet agree.
 template <int D>
 Vec<D> crossing(const Vec<D>& p, double sp, const Vec<D>& q, double sq) {
-    return p + (sp / (sp - sq)) * (q - p);
+    return (sp * q - sq * p) / (sp - sq);
 }
 
 template <int D>
@@ -119,8 +136,8 @@ class Polytope<2> {
         for (int i = 0; i < m_n; ++i) {
             const int j = (i + 1) % m_n;
             if (s[i] >= 0) out[m++] = m_v[i];
-            if (s[i] > 0 && s[j] < 0) out[m++] = crossing<2>(m_v[i], s[i], m_v[j], s[j]);
-            if (s[i] < 0 && s[j] > 0) out[m++] = crossing<2>(m_v[j], s[j], m_v[i], s[i]);
+            if ((s[i] > 0 && s[j] < 0) || (s[i] < 0 && s[j] > 0))
+                out[m++] = crossing<2>(m_v[i], s[i], m_v[j], s[j]);
         }
         CG_ASSERT(m <= kCapacity, "Polytope<2>: vertex buffer overflow");
         m_v = out;
@@ -128,12 +145,15 @@ class Polytope<2> {
         return ClipResult::Clipped;
     }
 
-    /// Area by the shoelace formula.
+    /// Area by the shoelace formula, about the mean of the vertices: it lies inside, so every
+    /// term is >= 0 and the round-off is relative to the polygon, not to the clipped triangle.
     double measure() const {
+        Vec<2> c = Vec<2>::Zero();
+        for (int i = 0; i < m_n; ++i) c += m_v[i];
+        c /= m_n;
         double twice = 0;
         for (int i = 0; i < m_n; ++i) {
-            const Vec<2>& p = m_v[i];
-            const Vec<2>& q = m_v[(i + 1) % m_n];
+            const Vec<2> p = m_v[i] - c, q = m_v[(i + 1) % m_n] - c;
             twice += p.x() * q.y() - p.y() * q.x();
         }
         return 0.5 * twice;
@@ -212,9 +232,13 @@ class Polytope<3> {
         return ClipResult::Clipped;
     }
 
-    /// Volume by the divergence theorem: a fan of tets from the origin over a fan of triangles
-    /// on each face.
+    /// Volume by the divergence theorem: a fan of tets from the mean of the vertices over a fan
+    /// of triangles on each face. The mean lies inside, so every tet counts >= 0 and the
+    /// round-off is relative to the polyhedron, not to the clipped tet.
     double measure() const {
+        Vec<3> c = Vec<3>::Zero();
+        for (int v = 0; v < m_n; ++v) c += m_pos[v];
+        c /= m_n;
         std::array<std::array<bool, 3>, kCapacity> done{};
         double six = 0;
         for (int start = 0; start < m_n; ++start)
@@ -228,7 +252,8 @@ class Polytope<3> {
                     const int k = (slot(cur, prev) + 1) % 3;
                     done[cur][k] = true;
                     const int next = m_nbr[cur][k];
-                    if (next != start) six += m_pos[start].dot(m_pos[next].cross(m_pos[cur]));
+                    if (next != start)
+                        six += (m_pos[start] - c).dot((m_pos[next] - c).cross(m_pos[cur] - c));
                     prev = cur;
                     cur = next;
                 }
@@ -275,9 +300,9 @@ double clip_measure(const Simplex<D>& p, const Simplex<D>& q) {
     const double tol = kOnPlane * std::max(a.extent, b.extent);
     bool clipped = false;
     for (int i = 0; i <= D; ++i) {
-        // Facet i of b passes through corner i+1: distance n . (x - x_{i+1}) in local coordinates.
+        // Distance to facet i of b, n . (x - base), in coordinates centred on a.
         const Vec<D>& n = b.normal[i];
-        switch (poly.clip(n, n.dot(o - b.x[(i + 1) % (D + 1)]), tol)) {
+        switch (poly.clip(n, n.dot(o - b.base[i]), tol)) {
             case ClipResult::Empty:
                 return 0.0;
             case ClipResult::Clipped:
@@ -287,8 +312,7 @@ double clip_measure(const Simplex<D>& p, const Simplex<D>& q) {
                 break;
         }
     }
-    const double m = clipped ? poly.measure() : a.measure;
-    return m > kNegligible * a.measure ? m : 0.0;
+    return clipped ? std::max(poly.measure(), 0.0) : a.measure;
 }
 
 template <int D>

@@ -12,11 +12,15 @@
 /// function of the corners, so round-off only perturbs it by round-off.
 ///
 /// Tolerance: a vertex within 1e-14 H of a clipping plane, H the larger bounding-box extent of
-/// the two simplices, counts as lying on it. Shared faces, coincident vertices and coplanar
-/// faces (nested or aligned grids) thus give exact results: a simplex inside the other is
-/// returned with its own measure untouched, simplices that only touch give exactly 0. Results
-/// below 1e-13 times the smaller measure (what is left of a lower-dimensional contact after
-/// round-off) are reported as 0.
+/// the two simplices, counts as lying on it. Shared faces, coincident vertices and coplanar faces
+/// (nested or aligned grids) thus give exact results: a simplex inside the other is returned
+/// with its own measure untouched, simplices that only touch give exactly 0. The price is an
+/// error of at most about 1e-14 H / h relative to the measure of a simplex of extent h (measured:
+/// 1e-13 for 32^3 fine tets in 5x5x4 coarse cells). Facet planes are computed from the facet's
+/// corners alone, so neighbours sharing a facet cut along the same plane to the last bit.
+/// Coordinates far from the origin compared with the element size (|x| / h > 1e2) are not
+/// exactly coplanar in floating point where they should be: touching pairs may then show slivers
+/// of relative measure about 1e-16 |x| / h, which are reported (the sums stay right).
 #include <vector>
 
 #include "coarsegrain/common/types.hpp"
