@@ -119,6 +119,24 @@ Eigen::VectorXd closest_on_facet(const Eigen::VectorXd& p, const Small& P) {
     return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
+/// Parameter t >= -tol at which the ray c + t n meets the facet with corners P (rows), or
+/// +infinity if it misses (edges in 2D, triangles in 3D, Möller-Trumbore).
+double ray_hit(const Eigen::VectorXd& c, const Eigen::VectorXd& n, const Small& P, double tol) {
+    const int dim = static_cast<int>(P.cols());
+    Small M(dim, dim);  // [edges | -n] (s, t) = c - P0
+    for (int i = 1; i < dim; ++i) M.col(i - 1) = (P.row(i) - P.row(0)).transpose();
+    M.col(dim - 1) = -n;
+    const Eigen::FullPivLU<Small> lu(M);
+    if (!lu.isInvertible()) return std::numeric_limits<double>::infinity();  // parallel
+    const SmallVec st = lu.solve(c - P.row(0).transpose());
+    const double eps = 1e-12;
+    const double t = st[dim - 1];
+    const double s_sum = st.head(dim - 1).sum();
+    if (t < -tol || (st.head(dim - 1).array() < -eps).any() || s_sum > 1 + eps)
+        return std::numeric_limits<double>::infinity();
+    return t;
+}
+
 }  // namespace
 
 std::pair<int, int> mandel_pair(int dim, int J) {
@@ -222,7 +240,7 @@ Matrix coarse_boundary_normals(const mesh::Mesh& fine, const mesh::Boundary& fb,
         for (Eigen::Index a = 0; a < cb.facets.cols(); ++a)
             by_node[fill[cb.facets(f, a)]++] = f;
     const Matrix box = mesh::bounding_box(coarse);
-    const double tie = 1e-12 * (box.row(1) - box.row(0)).norm();
+    const double tol = 1e-12 * (box.row(1) - box.row(0)).norm();
     const mesh::PointLocator locator(coarse);
 
     Matrix N = fb.normals;
@@ -244,19 +262,25 @@ Matrix coarse_boundary_normals(const mesh::Mesh& fine, const mesh::Boundary& fb,
             candidates.resize(cb.size());
             for (Index g = 0; g < cb.size(); ++g) candidates[g] = g;
         }
-        double best = std::numeric_limits<double>::infinity(), best_align = -2;
-        Index chosen = -1;
+        const Eigen::VectorXd n = fb.normals.row(f).transpose();
+        double best_hit = std::numeric_limits<double>::infinity();
+        double best_dist = std::numeric_limits<double>::infinity();
+        Index hit = -1, nearest = -1;
         for (Index g : candidates) {
             Small P(dim, dim);
             for (int a = 0; a < dim; ++a) P.row(a) = coarse.rest_positions.row(cb.facets(g, a));
+            const double t = ray_hit(c, n, P, tol);
+            if (t < best_hit) {
+                best_hit = t;
+                hit = g;
+            }
             const double d = (closest_on_facet(c, P) - c).norm();
-            const double align = cb.normals.row(g).dot(fb.normals.row(f));
-            if (d < best - tie || (d <= best + tie && align > best_align)) {
-                best = std::min(best, d);
-                best_align = align;
-                chosen = g;
+            if (d < best_dist) {
+                best_dist = d;
+                nearest = g;
             }
         }
+        const Index chosen = hit >= 0 ? hit : nearest;
         N.row(f) = cb.normals.row(chosen);
     }
     return N;

@@ -59,15 +59,12 @@ Matrix harmonic_displacements(const mesh::Mesh& mesh, const mesh::Boundary& b,
                               const std::vector<Index>& fixed_dofs = {});
 
 /// The normals N of Sec. 4.2: for each fine boundary facet of the outer boundary (component 0),
-/// the outward unit normal of the coarse boundary facet nearest to the fine facet's centroid,
-/// searched among the coarse boundary facets that share a node with the coarse element
-/// containing (or nearest to) the centroid, and among all coarse boundary facets if there are
-/// none; equally near facets (within 1e-12 of the coarse element size, e.g. at an edge of a box)
-/// are ranked by alignment with the fine normal. Facets of other components keep their own
-/// normals (they carry no traction).
-/// @param[in] fine    simplicial fine mesh and its boundary fb
-/// @param[in] coarse  simplicial coarse mesh of the same dimension
-/// @return #F by dim unit normals
+/// the outward unit normal of the coarse boundary facet it faces: the first one the ray from the
+/// fine facet's centroid along the fine normal meets (a facet on the coarse boundary meets itself
+/// at distance 0). Candidates are the coarse boundary facets that share a node with the coarse
+/// element containing (or nearest to) the centroid, or all coarse boundary facets if there are
+/// none; if the ray meets no candidate, the nearest candidate is taken. Facets of other
+/// components keep their own normals (they carry no traction).
 Matrix coarse_boundary_normals(const mesh::Mesh& fine, const mesh::Boundary& fb,
                                const mesh::Mesh& coarse);
 
