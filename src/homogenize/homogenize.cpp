@@ -173,9 +173,10 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
                  "{}: coarse.mesh is {}D, the fine mesh {}D", scene.source,
                  scene.coarse_mesh->dim(), dim);
     const std::string where = scene.source + ": coarse.mesh";
-    mesh::validate(*scene.coarse_mesh, where);
-    c.coarse = mesh::simplex_split(*scene.coarse_mesh);
-    c.coarse.material_ids.setZero(c.coarse.num_elements());
+    mesh::Mesh coarse = *scene.coarse_mesh;
+    coarse.material_ids.setZero(coarse.num_elements());  // ignored: coarse elements get tensors
+    mesh::validate(coarse, where);
+    c.coarse = mesh::simplex_split(coarse);
     c.fine = mesh::simplex_split(fine.mesh);
     c.fine_materials = fine.materials;
     if (!mesh::is_simplex(fine.mesh.type)) {

@@ -34,6 +34,19 @@ inline nlohmann::json box(const std::vector<double>& min, const std::vector<doub
     return j;
 }
 
+/// A parsed scene and its fine model.
+struct Setup {
+    scene::Scene scene;
+    scene::FineModel fine;
+};
+
+inline Setup setup(const nlohmann::json& j) {
+    Setup s;
+    s.scene = scene::parse_scene(j, "test.json", "");
+    s.fine = scene::build_fine_model(s.scene);
+    return s;
+}
+
 /// Solves a coarse model: K_c u = f with its Dirichlet conditions eliminated (CHOLMOD).
 inline Vector solve_coarse(const coarsen::CoarseModel& m) {
     const fem::ReducedSystem sys = fem::reduce(m.K, m.f, m.bc);
