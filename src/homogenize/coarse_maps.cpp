@@ -77,13 +77,13 @@ HarmonicMap::HarmonicMap(const mesh::Mesh& coarse, const Matrix& H_coarse, const
     detail::verify_simplicial(coarse, "harmonic map");
     const int d = m_dim, n = mandel_size(d), dd = d * d;
     const Index np = static_cast<Index>(points.rows());
-    CG_VERIFY(H_coarse.rows() == coarse.num_dofs() && H_coarse.cols() == n &&
-                  points.cols() == d && H_points.rows() == d * np && H_points.cols() == n &&
+    CG_VERIFY(H_coarse.rows() == coarse.num_dofs() && H_coarse.cols() == n && points.cols() == d &&
+                  H_points.rows() == d * np && H_points.cols() == n &&
                   static_cast<Index>(m_carrier.size()) == np,
               "harmonic map: inconsistent sizes (coarse fields {}x{}, {} points of dim {}, point "
               "fields {}x{}, {} carriers)",
-              H_coarse.rows(), H_coarse.cols(), np, points.cols(), H_points.rows(),
-              H_points.cols(), m_carrier.size());
+              H_coarse.rows(), H_coarse.cols(), np, points.cols(), H_points.rows(), H_points.cols(),
+              m_carrier.size());
     const Index nc = coarse.num_elements();
     m_edge_maps.resize(static_cast<std::size_t>(nc));
     std::vector<Matrix> inverse(static_cast<std::size_t>(nc));
@@ -113,13 +113,12 @@ HarmonicMap::HarmonicMap(const mesh::Mesh& coarse, const Matrix& H_coarse, const
     t.reserve(static_cast<std::size_t>(np) * d * npe * d);
     for (Index p = 0; p < np; ++p) {
         const Index q = m_carrier[p];
-        CG_VERIFY(q >= 0 && q < nc, "harmonic map: point {} carried by coarse element {} of {}",
-                  p, q, nc);
+        CG_VERIFY(q >= 0 && q < nc, "harmonic map: point {} carried by coarse element {} of {}", p,
+                  q, nc);
         const Index v0 = coarse.elements(q, 0);
         Matrix Q(d, dd);
         Q.leftCols(n) = H_points.middleRows(d * p, d) - H_coarse.middleRows(d * v0, d);
-        const Eigen::VectorXd dx =
-            (points.row(p) - coarse.rest_positions.row(v0)).transpose();
+        const Eigen::VectorXd dx = (points.row(p) - coarse.rest_positions.row(v0)).transpose();
         for (int r = 0; r < dd - n; ++r) Q.col(n + r) = skew_generator(d, r) * dx;
         const Matrix QM = Q * inverse[q];  // d by dd, acting on edge differences (i, k)
         Matrix T = Matrix::Zero(d, npe * d);
@@ -154,11 +153,12 @@ Matrix HarmonicMap::deformed_positions(const Matrix& coarse_deformed) const {
         for (int i = 1; i <= d; ++i) {
             const Index vi = m_coarse.elements(q, i);
             D.col(i - 1) = (coarse_deformed.row(vi) - coarse_deformed.row(v0)).transpose();
-            D0.col(i - 1) = (m_coarse.rest_positions.row(vi) - m_coarse.rest_positions.row(v0))
-                                .transpose();
+            D0.col(i - 1) =
+                (m_coarse.rest_positions.row(vi) - m_coarse.rest_positions.row(v0)).transpose();
         }
         // Start from the polar rotation: R F symmetric for F = D D0^{-1}.
-        const Eigen::JacobiSVD<Matrix> svd(D * D0.inverse(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+        const Eigen::JacobiSVD<Matrix> svd(D * D0.inverse(),
+                                           Eigen::ComputeFullU | Eigen::ComputeFullV);
         Matrix Rf = svd.matrixU() * svd.matrixV().transpose();
         if (Rf.determinant() < 0) {
             Matrix U = svd.matrixU();
@@ -194,8 +194,10 @@ Matrix HarmonicMap::deformed_positions(const Matrix& coarse_deformed) const {
         S[q] = c;
     }
     for (Index q = 0; q < nc; ++q)
-        CG_VERIFY(converged[q], "harmonic map: no rotation and harmonic combination match the "
-                  "deformed coarse element {} (Eq. 9; Newton did not converge)", q);
+        CG_VERIFY(converged[q],
+                  "harmonic map: no rotation and harmonic combination match the "
+                  "deformed coarse element {} (Eq. 9; Newton did not converge)",
+                  q);
     Matrix x(m_points.rows(), d);
 #pragma omp parallel for schedule(static)
     for (Index p = 0; p < m_points.rows(); ++p) {

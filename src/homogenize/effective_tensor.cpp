@@ -95,8 +95,10 @@ std::vector<Mandel6> effective_tensors(int dim, const std::vector<Mandel6>& A,
     for (std::size_t q = 0; q < A.size(); ++q) {
         const Eigen::PartialPivLU<Matrix> lu(block(dim, G_coarse[q]));
         const Matrix Ginv = lu.inverse();
-        CG_VERIFY(Ginv.allFinite(), "effective tensor: the coarse mollifier of coarse element {} "
-                  "is singular", q);
+        CG_VERIFY(Ginv.allFinite(),
+                  "effective tensor: the coarse mollifier of coarse element {} "
+                  "is singular",
+                  q);
         const Matrix Cq = Ginv.transpose() * block(dim, A[q]) * Ginv;
         C[q] = embed(0.5 * (Cq + Cq.transpose()));
     }
@@ -104,8 +106,7 @@ std::vector<Mandel6> effective_tensors(int dim, const std::vector<Mandel6>& A,
 }
 
 std::vector<Mandel6> average_tensors(Average kind, const material::ElementMaterials& fine_materials,
-                                     const std::vector<mesh::Overlap>& overlaps,
-                                     Index num_coarse) {
+                                     const std::vector<mesh::Overlap>& overlaps, Index num_coarse) {
     const int dim = fine_materials.dim, n = mandel_size(dim);
     const std::vector<std::size_t> start = coarse_ranges(overlaps, num_coarse);
     if (kind == Average::Naive)

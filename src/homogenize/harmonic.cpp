@@ -166,8 +166,8 @@ Matrix harmonic_displacements(const mesh::Mesh& mesh, const mesh::Boundary& b,
               "harmonic displacements: K is {}x{}, the mesh has {} DOFs", K.rows(), K.cols(),
               ndofs);
     CG_VERIFY(normals.rows() == b.size() && normals.cols() == dim,
-              "harmonic displacements: {}x{} normals for {} boundary facets in {}D",
-              normals.rows(), normals.cols(), b.size(), dim);
+              "harmonic displacements: {}x{} normals for {} boundary facets in {}D", normals.rows(),
+              normals.cols(), b.size(), dim);
 
     // Eq. 6 Neumann data: nodal forces of the traction E^{ab} N on the outer boundary.
     Matrix F = Matrix::Zero(ndofs, n);
@@ -237,8 +237,7 @@ Matrix coarse_boundary_normals(const mesh::Mesh& fine, const mesh::Boundary& fb,
     for (Index v = 0; v < coarse.num_nodes(); ++v) start[v + 1] += start[v];
     std::vector<Index> by_node(start.back()), fill(start.begin(), start.end() - 1);
     for (Index f = 0; f < cb.size(); ++f)
-        for (Eigen::Index a = 0; a < cb.facets.cols(); ++a)
-            by_node[fill[cb.facets(f, a)]++] = f;
+        for (Eigen::Index a = 0; a < cb.facets.cols(); ++a) by_node[fill[cb.facets(f, a)]++] = f;
     const Matrix box = mesh::bounding_box(coarse);
     const double tol = 1e-12 * (box.row(1) - box.row(0)).norm();
     const mesh::PointLocator locator(coarse);
@@ -312,8 +311,8 @@ Matrix sample_harmonic(const mesh::Mesh& fine, const mesh::PointLocator& locator
     const int dim = fine.dim();
     CG_VERIFY(points.cols() == dim, "sample harmonic fields: {}D points on a {}D mesh",
               points.cols(), dim);
-    CG_VERIFY(h.rows() == fine.num_dofs(), "sample harmonic fields: {} rows for {} DOFs",
-              h.rows(), fine.num_dofs());
+    CG_VERIFY(h.rows() == fine.num_dofs(), "sample harmonic fields: {} rows for {} DOFs", h.rows(),
+              fine.num_dofs());
     const Index np = static_cast<Index>(points.rows());
     Matrix H(dim * np, h.cols());
     if (distance) distance->setZero(np);

@@ -29,7 +29,9 @@ bool parse_choice(const scene::JsonReader& r, const char* key, const char* first
     return s == second;
 }
 
-std::string point_string(const Eigen::VectorXd& p) { return fmt::format("({:.4g})", fmt::join(p, ", ")); }
+std::string point_string(const Eigen::VectorXd& p) {
+    return fmt::format("({:.4g})", fmt::join(p, ", "));
+}
 
 Eigen::VectorXd centroid(const mesh::Mesh& m, Index e) {
     return m.element_positions(e).colwise().mean().transpose();
@@ -37,7 +39,8 @@ Eigen::VectorXd centroid(const mesh::Mesh& m, Index e) {
 
 std::string box_string(const mesh::Mesh& m) {
     const Matrix b = mesh::bounding_box(m);
-    return fmt::format("[{:.4g}] .. [{:.4g}]", fmt::join(b.row(0), ", "), fmt::join(b.row(1), ", "));
+    return fmt::format("[{:.4g}] .. [{:.4g}]", fmt::join(b.row(0), ", "),
+                       fmt::join(b.row(1), ", "));
 }
 
 /// Overlap sanity: the coarse mesh must meet the fine mesh, cover all of it, and hold fine
@@ -94,7 +97,8 @@ Vector verify_node_distances(const Coarsening& c, const mesh::PointLocator& fine
         const mesh::Location loc = fine_locator.locate_nearest(p);
         Eigen::VectorXd x = Eigen::VectorXd::Zero(p.size());
         for (Eigen::Index a = 0; a < c.fine.elements.cols(); ++a)
-            x += loc.weights[a] * c.fine.rest_positions.row(c.fine.elements(loc.element, a)).transpose();
+            x += loc.weights[a] *
+                 c.fine.rest_positions.row(c.fine.elements(loc.element, a)).transpose();
         dist[v] = (x - p).norm();
     }
     for (Index v = 0; v < nv; ++v)
@@ -124,9 +128,8 @@ HarmonicPart harmonic_part(const Coarsening& c, const scene::FineModel& fine,
         const mesh::Boundary b_split = split ? mesh::boundary(c.fine) : mesh::Boundary();
         const SparseMatrix& K = split ? K_split : fine.K;
         const mesh::Boundary& b = split ? b_split : fine.boundary;
-        const Matrix normals = c.options.coarse_normals
-                                   ? coarse_boundary_normals(c.fine, b, c.coarse)
-                                   : b.normals;
+        const Matrix normals =
+            c.options.coarse_normals ? coarse_boundary_normals(c.fine, b, c.coarse) : b.normals;
         r.h = harmonic_displacements(c.fine, b, K, normals, fixed_dofs);
     }
     const Phase phase("tensors", timings);
@@ -194,7 +197,8 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
         c.overlaps = mesh::intersect(c.fine, c.coarse);
         verify_overlaps(c, scene.source);
         outside = verify_node_distances(c, fine_locator, where);
-        c.element_mass = coarse_element_masses(c.fine_materials, c.overlaps, c.coarse.num_elements());
+        c.element_mass =
+            coarse_element_masses(c.fine_materials, c.overlaps, c.coarse.num_elements());
     }
     c.report["fine_simplices"] = c.fine.num_elements();
     c.report["coarse_simplices"] = c.coarse.num_elements();
@@ -296,8 +300,7 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
                     dim, c.C[q].topLeftCorner(n, n), c.element_mass[q] / c.coarse_measures[q]));
             } catch (const Error& e) {
                 CG_VERIFY(false, "{}: coarse.mesh: the {} tensor of coarse element {} at {}: {}",
-                          scene.source, c.method, q, point_string(centroid(c.coarse, q)),
-                          e.what());
+                          scene.source, c.method, q, point_string(centroid(c.coarse, q)), e.what());
             }
             mats.index[q] = q;
         }

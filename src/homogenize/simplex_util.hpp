@@ -63,9 +63,9 @@ inline double longest_edge(const mesh::Mesh& m, Index e) {
     const Index npe = static_cast<Index>(m.elements.cols());
     for (Index a = 0; a < npe; ++a)
         for (Index b = a + 1; b < npe; ++b)
-            h = std::max(h, (m.rest_positions.row(m.elements(e, a)) -
-                             m.rest_positions.row(m.elements(e, b)))
-                                .norm());
+            h = std::max(
+                h, (m.rest_positions.row(m.elements(e, a)) - m.rest_positions.row(m.elements(e, b)))
+                       .norm());
     return h;
 }
 

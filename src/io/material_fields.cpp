@@ -49,11 +49,13 @@ std::map<int, material::Material> element_materials_from_fields(const VtuFields&
     const Index ne = mesh.num_elements();
     auto column = [&](const std::string& name) -> const Matrix& {
         const Field* f = find_cell_field(fields, name);
-        CG_VERIFY(f, "{}: cell field {} is missing (element tensors need every C_voigt_IJ and "
-                  "density)", source, name);
+        CG_VERIFY(f,
+                  "{}: cell field {} is missing (element tensors need every C_voigt_IJ and "
+                  "density)",
+                  source, name);
         CG_VERIFY(f->values.rows() == ne && f->values.cols() == 1,
-                  "{}: cell field {} is {}x{}, expected one value per element ({})", source,
-                  name, f->values.rows(), f->values.cols(), ne);
+                  "{}: cell field {} is {}x{}, expected one value per element ({})", source, name,
+                  f->values.rows(), f->values.cols(), ne);
         return f->values;
     };
     std::vector<const Matrix*> entries;

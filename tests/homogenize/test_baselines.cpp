@@ -22,15 +22,17 @@ using test::iso;
 constexpr std::array<double, 6> kFraction = {1.0 / 8, 1.0 / 8, 1.0 / 2, 7.0 / 8, 1.0 / 2, 7.0 / 8};
 
 test::Setup half_and_half(const json& m1, const json& m2) {
-    return test::setup({{"mesh", grid({0, 0, 0}, {1, 1, 1}, {4, 4, 4}, "tet")},
-                        {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.5}, {"ids", {1, 2}}}}}},
-                        {"materials", {{"1", m1}, {"2", m2}}},
-                        {"coarse", {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {1, 1, 1}, "tet")}}}});
+    return test::setup(
+        {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {4, 4, 4}, "tet")},
+         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.5}, {"ids", {1, 2}}}}}},
+         {"materials", {{"1", m1}, {"2", m2}}},
+         {"coarse", {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {1, 1, 1}, "tet")}}}});
 }
 
 TEST(Baselines, VoigtAndReussAreTheClosedFormAverages) {
     const test::Setup s = half_and_half(iso(100.0, 0.3, 2.0), iso(1.0, 0.45, 1.0));
-    const Matrix C1 = material::isotropic(3, 100.0, 0.3, 2.0).C, C2 = material::isotropic(3, 1.0, 0.45, 1.0).C;
+    const Matrix C1 = material::isotropic(3, 100.0, 0.3, 2.0).C,
+                 C2 = material::isotropic(3, 1.0, 0.45, 1.0).C;
     const homogenize::Coarsening voigt = homogenize::coarsening(s.scene, s.fine, "voigt");
     const homogenize::Coarsening reuss = homogenize::coarsening(s.scene, s.fine, "reuss");
     const homogenize::Coarsening naive = homogenize::coarsening(s.scene, s.fine, "naive");

@@ -21,12 +21,15 @@ using test::iso;
 /// A heterogeneous scene (stiff discs/balls in a soft matrix, contrast 100) and its coarsening.
 homogenize::Coarsening spheres(int dim, test::Setup& s) {
     const std::vector<double> lo(dim, 0.0), hi(dim, 1.0), clo(dim, -0.1), chi(dim, 1.1);
-    const json centres = dim == 3 ? json{{0.3, 0.3, 0.3}, {0.7, 0.6, 0.4}} : json{{0.3, 0.3}, {0.7, 0.6}};
+    const json centres =
+        dim == 3 ? json{{0.3, 0.3, 0.3}, {0.7, 0.6, 0.4}} : json{{0.3, 0.3}, {0.7, 0.6}};
     s = test::setup(
         {{"mesh", grid(lo, hi, std::vector<int>(dim, dim == 3 ? 6 : 12), dim == 3 ? "tet" : "tri")},
-         {"material_field", {{"spheres", {{"centres", centres}, {"radius", 0.2}, {"inside", 2}, {"outside", 1}}}}},
+         {"material_field",
+          {{"spheres", {{"centres", centres}, {"radius", 0.2}, {"inside", 2}, {"outside", 1}}}}},
          {"materials", {{"1", iso(1.0, 0.3)}, {"2", iso(100.0, 0.35)}}},
-         {"coarse", {{"mesh", grid(clo, chi, std::vector<int>(dim, 2), dim == 3 ? "tet" : "tri")}}}});
+         {"coarse",
+          {{"mesh", grid(clo, chi, std::vector<int>(dim, 2), dim == 3 ? "tet" : "tri")}}}});
     return homogenize::coarsening(s.scene, s.fine, "effective-tensor");
 }
 
@@ -102,10 +105,10 @@ INSTANTIATE_TEST_SUITE_P(HarmonicMap, HarmonicMapDim, ::testing::Values(2, 3));
 // A homogeneous body under an affine coarse deformation (rotation times a stretch): the fine
 // nodes follow the same affine map, because h is linear.
 TEST(HarmonicMap, AffineDeformationOfAHomogeneousBodyIsReproduced) {
-    const test::Setup s = test::setup(
-        {{"mesh", grid({0, 0, 0}, {2, 1, 1}, {6, 3, 3}, "hex")},
-         {"materials", {{"0", iso(10.0, 0.25)}}},
-         {"coarse", {{"mesh", grid({0, 0, 0}, {2, 1, 1}, {2, 1, 1}, "tet")}}}});
+    const test::Setup s =
+        test::setup({{"mesh", grid({0, 0, 0}, {2, 1, 1}, {6, 3, 3}, "hex")},
+                     {"materials", {{"0", iso(10.0, 0.25)}}},
+                     {"coarse", {{"mesh", grid({0, 0, 0}, {2, 1, 1}, {2, 1, 1}, "tet")}}}});
     const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
     Eigen::Matrix3d F;
     F << 1.1, 0.05, 0.0, 0.05, 0.95, 0.02, 0.0, 0.02, 1.2;  // symmetric stretch
@@ -125,8 +128,8 @@ TEST(HarmonicMap, BarycentricEmbeddingReproducesLinearFields) {
     A << 0.3, -0.2, 0.7, 0.1;
     const Eigen::Vector2d b(0.5, -1.0);
     const mesh::PointLocator locator(coarse);
-    const SparseMatrix E =
-        homogenize::barycentric_embedding(coarse, homogenize::locate_points(locator, fine.rest_positions));
+    const SparseMatrix E = homogenize::barycentric_embedding(
+        coarse, homogenize::locate_points(locator, fine.rest_positions));
     const Vector u = E * test::linear_field(coarse.rest_positions, A, b);
     EXPECT_LT((u - test::linear_field(fine.rest_positions, A, b)).cwiseAbs().maxCoeff(), 1e-13);
 }

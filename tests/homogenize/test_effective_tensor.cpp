@@ -50,8 +50,8 @@ double eq5_defect(const homogenize::Coarsening& c) {
     double worst = 0;
     for (Index q = 0; q < c.coarse.num_elements(); ++q) {
         const Matrix Gq = c.G_coarse[q].topLeftCorner(n, n);
-        const Matrix coarse_energy = mesh::element_measure(c.coarse, q) * Gq.transpose() *
-                                     c.C[q].topLeftCorner(n, n) * Gq;
+        const Matrix coarse_energy =
+            mesh::element_measure(c.coarse, q) * Gq.transpose() * c.C[q].topLeftCorner(n, n) * Gq;
         worst = std::max(worst, (coarse_energy - fine_energy[q]).norm() / fine_energy[q].norm());
     }
     return worst;
@@ -76,11 +76,12 @@ json spheres_scene(int dim) {
     const std::vector<double> lo(dim, 0.0), hi(dim, 1.0), clo(dim, -0.1), chi(dim, 1.1);
     json centres = dim == 3 ? json{{0.3, 0.3, 0.3}, {0.7, 0.6, 0.4}, {0.4, 0.7, 0.75}}
                             : json{{0.3, 0.3}, {0.7, 0.6}, {0.4, 0.75}};
-    return {{"mesh", grid(lo, hi, std::vector<int>(dim, dim == 3 ? 6 : 12), dim == 3 ? "tet" : "tri")},
-            {"material_field",
-             {{"spheres", {{"centres", centres}, {"radius", 0.2}, {"inside", 2}, {"outside", 1}}}}},
-            {"materials", {{"1", iso(1.0, 0.3)}, {"2", iso(100.0, 0.35, 3.0)}}},
-            {"coarse", {{"mesh", grid(clo, chi, std::vector<int>(dim, 2), dim == 3 ? "tet" : "tri")}}}};
+    return {
+        {"mesh", grid(lo, hi, std::vector<int>(dim, dim == 3 ? 6 : 12), dim == 3 ? "tet" : "tri")},
+        {"material_field",
+         {{"spheres", {{"centres", centres}, {"radius", 0.2}, {"inside", 2}, {"outside", 1}}}}},
+        {"materials", {{"1", iso(1.0, 0.3)}, {"2", iso(100.0, 0.35, 3.0)}}},
+        {"coarse", {{"mesh", grid(clo, chi, std::vector<int>(dim, 2), dim == 3 ? "tet" : "tri")}}}};
 }
 
 class EffectiveTensorDim : public ::testing::TestWithParam<int> {};
@@ -114,8 +115,9 @@ TEST_P(EffectiveTensorDim, HomogeneousObjectCoarsensToItsOwnTensor) {
         {{"mesh", grid(lo, hi, dim == 3 ? std::vector<int>{8, 4, 4} : std::vector<int>{16, 8},
                        dim == 3 ? "tet" : "tri")},
          {"materials", {{"0", {{"C_mandel", matrix_json(C)}, {"density", 2.0}}}}},
-         {"coarse", {{"mesh", grid(lo, hi, dim == 3 ? std::vector<int>{3, 2, 2} : std::vector<int>{5, 3},
-                                  dim == 3 ? "tet" : "tri")}}}});
+         {"coarse",
+          {{"mesh", grid(lo, hi, dim == 3 ? std::vector<int>{3, 2, 2} : std::vector<int>{5, 3},
+                         dim == 3 ? "tet" : "tri")}}}});
     test::distort_interior(*s.scene.coarse_mesh, 0.2, 3);
     const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
     double worst = 0;
@@ -139,10 +141,13 @@ TEST_P(EffectiveTensorDim, HomogeneousSolutionEqualsTheNaiveOne) {
          {"materials", {{"0", iso(1e3, 0.3, 1.5)}}},
          {"dirichlet", {box(clamp_lo, clamp_hi)}},
          {"loads", {{"gravity", g}}},
-         {"coarse", {{"mesh", grid(lo, hi, dim == 3 ? std::vector<int>{4, 2, 2} : std::vector<int>{5, 2},
-                                  dim == 3 ? "tet" : "tri")}}}});
-    const Vector u_et = test::solve_coarse(homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor"));
-    const Vector u_naive = test::solve_coarse(homogenize::build_coarse_model(s.scene, s.fine, "naive"));
+         {"coarse",
+          {{"mesh", grid(lo, hi, dim == 3 ? std::vector<int>{4, 2, 2} : std::vector<int>{5, 2},
+                         dim == 3 ? "tet" : "tri")}}}});
+    const Vector u_et =
+        test::solve_coarse(homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor"));
+    const Vector u_naive =
+        test::solve_coarse(homogenize::build_coarse_model(s.scene, s.fine, "naive"));
     // 1e-8: tensors equal to ~1e-13, a direct solve with condition number ~1e4.
     EXPECT_LT((u_et - u_naive).norm(), 1e-8 * u_naive.norm());
 }
@@ -179,8 +184,8 @@ TEST(EffectiveTensor, SpringsInSeriesGiveTheSeriesStiffness) {
     const double k_fine = stiffness(s.fine.mesh, scene::solve_static(s.fine, {}).u);
     EXPECT_NEAR(k_fine, k_series, 1e-9 * k_series);  // uniaxial stress: exact up to round-off
     auto coarse = [&](const std::string& method) {
-        return stiffness(*s.scene.coarse_mesh,
-                         test::solve_coarse(homogenize::build_coarse_model(s.scene, s.fine, method)));
+        return stiffness(*s.scene.coarse_mesh, test::solve_coarse(homogenize::build_coarse_model(
+                                                   s.scene, s.fine, method)));
     };
     const double k_et = coarse("effective-tensor"), k_naive = coarse("naive");
     std::printf("series stiffness %.6g, effective-tensor %.6g, naive %.6g\n", k_series, k_et,
@@ -193,10 +198,11 @@ TEST(EffectiveTensor, SpringsInSeriesGiveTheSeriesStiffness) {
 TEST_P(EffectiveTensorDim, CoarseMassEqualsFineMass) {
     const int dim = GetParam();
     const test::Setup s = test::setup(spheres_scene(dim));
-    const coarsen::CoarseModel m = homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor");
-    const double fine_mass = fem::mass_matrix(s.fine.mesh, s.fine.materials, fem::MassType::Lumped)
-                                 .diagonal()
-                                 .sum() / dim;
+    const coarsen::CoarseModel m =
+        homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor");
+    const double fine_mass =
+        fem::mass_matrix(s.fine.mesh, s.fine.materials, fem::MassType::Lumped).diagonal().sum() /
+        dim;
     EXPECT_NEAR(m.mass.sum() / dim, fine_mass, 1e-12 * fine_mass);
     EXPECT_NEAR(m.report["mass"]["coarse"].get<double>(), fine_mass, 1e-12 * fine_mass);
 }
@@ -206,11 +212,11 @@ TEST_P(EffectiveTensorDim, CoarseMassEqualsFineMass) {
 // of it and weighs rho (1 - 1/27) / 6.
 TEST(EffectiveTensor, CavityWeighsNothing) {
     const double rho = 2.5;
-    scene::Scene sc = scene::parse_scene(
-        {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {6, 6, 6}, "tet")},
-         {"materials", {{"0", iso(10.0, 0.3, rho)}}},
-         {"coarse", {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {1, 1, 1}, "tet")}}}},
-        "cavity.json", "");
+    scene::Scene sc =
+        scene::parse_scene({{"mesh", grid({0, 0, 0}, {1, 1, 1}, {6, 6, 6}, "tet")},
+                            {"materials", {{"0", iso(10.0, 0.3, rho)}}},
+                            {"coarse", {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {1, 1, 1}, "tet")}}}},
+                           "cavity.json", "");
     sc.mesh = test::drop_elements(sc.mesh, [](const Eigen::VectorXd& c) {
         return (c.array() > 1.0 / 3).all() && (c.array() < 2.0 / 3).all();
     });
@@ -234,7 +240,8 @@ TEST(EffectiveTensor, CoarseModelFileSimulatesWithoutTheFineMesh) {
     j["dirichlet"] = clamp;
     j["loads"] = {{"gravity", {0, -1, -9.81}}};
     const test::Setup s = test::setup(j);
-    const coarsen::CoarseModel m = homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor");
+    const coarsen::CoarseModel m =
+        homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor");
     ASSERT_EQ(m.outputs.front().file, "coarse_model.vtu");
     const std::string dir = test::temp_dir("coarse_model_file");
     io::write_vtu(dir + "/coarse_model.vtu", m.outputs.front().mesh, m.outputs.front().fields);
@@ -258,6 +265,34 @@ TEST(EffectiveTensor, CoarseModelFileSimulatesWithoutTheFineMesh) {
         "carries one elasticity tensor per element");
 }
 
+// Mixed boundary (Sec. 3.8): the harmonic displacements vanish on the clamped nodes. The P1
+// interpolant of fields that vanish at two or more nodes of a coarse element has no strain along
+// their edge (or face), so exactly the coarse elements with >= 2 clamped nodes have a singular
+// mollifier and fall back to the pure-Neumann one; Eq. 5 still holds with each element's own
+// mollifiers, and every tensor is symmetric positive definite.
+TEST(EffectiveTensor, MixedBoundaryFallsBackWhereTheClampPinsAnEdge) {
+    const test::Setup s = test::setup(
+        {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {16, 4, 4}, "hex")},
+         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.5}, {"ids", {1, 2}}}}}},
+         {"materials", {{"1", iso(1e3, 0.3)}, {"2", iso(1.0, 0.45)}}},
+         {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
+         {"loads", {{"gravity", {0, 0, -1}}}},
+         {"coarse",
+          {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {4, 2, 2}, "tet")}, {"boundary", "mixed"}}}});
+    const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
+    std::vector<Index> pinned;
+    for (Index q = 0; q < c.coarse.num_elements(); ++q) {
+        int clamped = 0;
+        for (Index a = 0; a < 4; ++a)
+            clamped += c.coarse.rest_positions(c.coarse.elements(q, a), 0) < 1e-9;
+        if (clamped >= 2) pinned.push_back(q);
+    }
+    EXPECT_EQ(c.fallback, pinned);
+    EXPECT_EQ(c.report["fallback_elements"].get<std::vector<Index>>(), pinned);
+    EXPECT_LT(eq5_defect(c), 1e-10);
+    EXPECT_GT(spd_figures(c).first, 0.0);
+}
+
 // Bad input: each error names what is wrong.
 TEST(EffectiveTensor, BadInputIsNamed) {
     const json fine_part = {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {4, 4, 4}, "tet")},
@@ -269,17 +304,33 @@ TEST(EffectiveTensor, BadInputIsNamed) {
         homogenize::build_coarse_model(s.scene, s.fine, method);
     };
     const json cover = grid({0, 0, 0}, {1, 1, 1}, {1, 1, 1}, "tet");
-    test::expect_error([&] { run({{"mesh", grid({0, 0, 0}, {0.5, 1, 1}, {1, 1, 1}, "tet")}}); },
-                       "misses part of the object");
-    test::expect_error([&] { run({{"mesh", grid({100, 0, 0}, {101, 1, 1}, {1, 1, 1}, "tet")}}); },
-                       "does not overlap the fine mesh at all");
-    test::expect_error([&] { run({{"mesh", grid({0, 0, 0}, {1000, 1000, 1000}, {1, 1, 1}, "tet")}}); },
-                       "same units");
-    test::expect_error([&] { run({{"mesh", grid({0, 0, 0}, {2, 2, 2}, {2, 2, 2}, "tet")}}); },
-                       "contains no fine material");
+    test::expect_error(
+        [&] {
+            run({{"mesh", grid({0, 0, 0}, {0.5, 1, 1}, {1, 1, 1}, "tet")}});
+        },
+        "misses part of the object");
+    test::expect_error(
+        [&] {
+            run({{"mesh", grid({100, 0, 0}, {101, 1, 1}, {1, 1, 1}, "tet")}});
+        },
+        "does not overlap the fine mesh at all");
+    test::expect_error(
+        [&] {
+            run({{"mesh", grid({0, 0, 0}, {1000, 1000, 1000}, {1, 1, 1}, "tet")}});
+        },
+        "same units");
+    test::expect_error(
+        [&] {
+            run({{"mesh", grid({0, 0, 0}, {2, 2, 2}, {2, 2, 2}, "tet")}});
+        },
+        "contains no fine material");
     test::expect_error([&] { run({{"mesh", cover}}, "average"); }, "unknown coarsening method");
     test::expect_error([&] { run({{"mesh", cover}, {"normals", "outer"}}); }, "coarse.normals");
-    test::expect_error([&] { run({{"mesh", cover}, {"boundary", "dirichlet"}}); }, "coarse.boundary");
+    test::expect_error(
+        [&] {
+            run({{"mesh", cover}, {"boundary", "dirichlet"}});
+        },
+        "coarse.boundary");
     test::expect_error([&] { run({{"mesh", cover}, {"map", "linear"}}); }, "coarse.map");
     test::expect_error([&] { run({{"mesh", cover}, {"boundary", "mixed"}}); }, "needs fixed nodes");
     test::expect_error([&] { run({{"levels", 2}}); }, "needs a coarse mesh");

@@ -43,7 +43,8 @@ Matrix outer_traction_loads(const mesh::Mesh& m, const mesh::Boundary& b) {
     for (Index f = 0; f < b.size(); ++f) {
         if (b.component[f] != 0) continue;
         for (int J = 0; J < n; ++J)
-            F.col(J) += fem::traction_load(m, b, {f}, unit_stress(dim, J) * b.normals.row(f).transpose());
+            F.col(J) +=
+                fem::traction_load(m, b, {f}, unit_stress(dim, J) * b.normals.row(f).transpose());
     }
     return F;
 }
@@ -56,10 +57,11 @@ class HarmonicHomogeneous : public ::testing::TestWithParam<mesh::ElementType> {
 TEST_P(HarmonicHomogeneous, LinearWithStrainCInverseE) {
     const mesh::ElementType type = GetParam();
     const int dim = mesh::element_dim(type), n = mandel_size(dim);
-    const mesh::Mesh m = dim == 3 ? distorted_grid(type, Eigen::Vector3d(0, 0, 0),
-                                                   Eigen::Vector3d(2, 1, 1.5), Eigen::Vector3i(5, 3, 4))
-                                  : distorted_grid(type, Eigen::Vector2d(0, 0),
-                                                   Eigen::Vector2d(2, 1), Eigen::Vector2i(8, 5));
+    const mesh::Mesh m = dim == 3
+                             ? distorted_grid(type, Eigen::Vector3d(0, 0, 0),
+                                              Eigen::Vector3d(2, 1, 1.5), Eigen::Vector3i(5, 3, 4))
+                             : distorted_grid(type, Eigen::Vector2d(0, 0), Eigen::Vector2d(2, 1),
+                                              Eigen::Vector2i(8, 5));
     const Matrix C = test::random_spd_tensor(n, 3, 4.0) * 1e3;
     const auto mats = material::uniform(m, material::anisotropic(dim, C, 1.0));
     const mesh::Boundary b = mesh::boundary(m);
@@ -76,7 +78,8 @@ TEST_P(HarmonicHomogeneous, LinearWithStrainCInverseE) {
     Vector w = Vector::Zero(m.num_nodes());
     for (Index e = 0; e < m.num_elements(); ++e)
         for (Index a = 0; a < m.elements.cols(); ++a)
-            w[m.elements(e, a)] += mesh::element_measure(m, e) / static_cast<double>(m.elements.cols());
+            w[m.elements(e, a)] +=
+                mesh::element_measure(m, e) / static_cast<double>(m.elements.cols());
     const Eigen::VectorXd centre = m.rest_positions.transpose() * w / w.sum();
     const Matrix R = test::rigid_modes(m.rest_positions.rowwise() - centre.transpose());
     Matrix WR = R;
@@ -95,13 +98,15 @@ INSTANTIATE_TEST_SUITE_P(Harmonic, HarmonicHomogeneous,
 // traction-free (Sec. 4.2). With the exact normals the load is self-equilibrated, so the pinned
 // solve adds no reaction and the identity holds to round-off at every DOF.
 TEST(Harmonic, EquilibriumWithOuterTractionsAndFreeCavity) {
-    mesh::Mesh m = test::drop_elements(
-        mesh::make_grid(mesh::ElementType::Tet4, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1),
-                        Eigen::Vector3i(6, 6, 6)),
-        [](const Eigen::VectorXd& c) { return (c.array() > 1.0 / 3).all() && (c.array() < 2.0 / 3).all(); });
+    mesh::Mesh m =
+        test::drop_elements(mesh::make_grid(mesh::ElementType::Tet4, Eigen::Vector3d(0, 0, 0),
+                                            Eigen::Vector3d(1, 1, 1), Eigen::Vector3i(6, 6, 6)),
+                            [](const Eigen::VectorXd& c) {
+                                return (c.array() > 1.0 / 3).all() && (c.array() < 2.0 / 3).all();
+                            });
     material::layers(m, 2, 0.0, 1.0 / 6, {1, 2});
-    const auto mats = material::assign(
-        m, {{1, material::isotropic(3, 100.0, 0.3, 1.0)}, {2, material::isotropic(3, 1.0, 0.45, 1.0)}});
+    const auto mats = material::assign(m, {{1, material::isotropic(3, 100.0, 0.3, 1.0)},
+                                           {2, material::isotropic(3, 1.0, 0.45, 1.0)}});
     const mesh::Boundary b = mesh::boundary(m);
     ASSERT_EQ(b.num_components, 2);  // outer boundary and the cavity
     const SparseMatrix K = fem::stiffness_matrix(m, mats);
@@ -116,8 +121,8 @@ TEST(Harmonic, MixedVanishesOnFixedDofsAndBalancesTheRest) {
     mesh::Mesh m = mesh::make_grid(mesh::ElementType::Tri3, Eigen::Vector2d(0, 0),
                                    Eigen::Vector2d(3, 1), Eigen::Vector2i(12, 4));
     material::layers(m, 0, 0.0, 0.5, {1, 2});
-    const auto mats = material::assign(
-        m, {{1, material::isotropic(2, 50.0, 0.3, 1.0)}, {2, material::isotropic(2, 1.0, 0.3, 1.0)}});
+    const auto mats = material::assign(m, {{1, material::isotropic(2, 50.0, 0.3, 1.0)},
+                                           {2, material::isotropic(2, 1.0, 0.3, 1.0)}});
     const mesh::Boundary b = mesh::boundary(m);
     std::vector<Index> fixed;
     for (Index v : mesh::nodes_in_box(m, Eigen::Vector2d(-1, -1), Eigen::Vector2d(1e-9, 2)))
@@ -203,13 +208,15 @@ TEST(Harmonic, BadInputIsRejected) {
     const mesh::Mesh hex = mesh::make_grid(mesh::ElementType::Hex8, Eigen::Vector3d(0, 0, 0),
                                            Eigen::Vector3d(1, 1, 1), Eigen::Vector3i(1, 1, 1));
     const mesh::Boundary b = mesh::boundary(hex);
-    test::expect_error([&] { homogenize::harmonic_displacements(hex, b, SparseMatrix(24, 24), b.normals); },
-                       "simplicial");
+    test::expect_error(
+        [&] { homogenize::harmonic_displacements(hex, b, SparseMatrix(24, 24), b.normals); },
+        "simplicial");
     const mesh::Mesh tet = mesh::make_grid(mesh::ElementType::Tet4, Eigen::Vector3d(0, 0, 0),
                                            Eigen::Vector3d(1, 1, 1), Eigen::Vector3i(1, 1, 1));
     const mesh::Boundary bt = mesh::boundary(tet);
-    test::expect_error([&] { homogenize::harmonic_displacements(tet, bt, SparseMatrix(3, 3), bt.normals); },
-                       "K is 3x3");
+    test::expect_error(
+        [&] { homogenize::harmonic_displacements(tet, bt, SparseMatrix(3, 3), bt.normals); },
+        "K is 3x3");
     test::expect_error([&] { homogenize::mollifiers(tet, Matrix::Zero(24, 5)); }, "24x5");
 }
 

@@ -58,8 +58,7 @@ enum class Average {
 /// @throws Error if a naive average meets an anisotropic fine material, or a coarse element
 ///         holds no fine material
 std::vector<Mandel6> average_tensors(Average kind, const material::ElementMaterials& fine_materials,
-                                     const std::vector<mesh::Overlap>& overlaps,
-                                     Index num_coarse);
+                                     const std::vector<mesh::Overlap>& overlaps, Index num_coarse);
 
 /// Mass of fine material inside each coarse element, sum over overlaps of rho_p |T_p ∩ 𝕋_q|
 /// (cavities weigh nothing). Lumping it equally on the element's nodes gives the coarse lumped

@@ -8,10 +8,9 @@
 /// fine mollifiers G_p (Sec. 3.5), the coarse-sampled fields ℍ (Sec. 3.2) and the coarse
 /// mollifiers 𝔾_q follow, and Eq. 8 gives one anisotropic tensor per coarse element. The
 /// baselines replace the last three steps by averages over the same overlaps.
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "coarsegrain/coarsen/coarse_model.hpp"
 #include "coarsegrain/homogenize/effective_tensor.hpp"
@@ -42,13 +41,13 @@ Options parse_options(const scene::Scene& scene);
 struct Coarsening {
     std::string method;
     Options options;
-    mesh::Mesh fine;                           ///< simplicial fine mesh (the scene's, split)
-    material::ElementMaterials fine_materials; ///< materials of `fine`
-    mesh::Mesh coarse;                         ///< simplicial coarse mesh (coarse.mesh, split)
-    std::vector<mesh::Overlap> overlaps;       ///< mesh::intersect(fine, coarse)
-    Vector coarse_measures;                    ///< #Ec |𝕋_q|
-    Vector element_mass;                       ///< #Ec fine mass inside each coarse element
-    std::vector<Mandel6> C;                    ///< #Ec coarse tensors (Eq. 8 or an average)
+    mesh::Mesh fine;                            ///< simplicial fine mesh (the scene's, split)
+    material::ElementMaterials fine_materials;  ///< materials of `fine`
+    mesh::Mesh coarse;                          ///< simplicial coarse mesh (coarse.mesh, split)
+    std::vector<mesh::Overlap> overlaps;        ///< mesh::intersect(fine, coarse)
+    Vector coarse_measures;                     ///< #Ec |𝕋_q|
+    Vector element_mass;                        ///< #Ec fine mass inside each coarse element
+    std::vector<Mandel6> C;                     ///< #Ec coarse tensors (Eq. 8 or an average)
     // Effective-tensor method only:
     Matrix h;                       ///< fine harmonic fields, fine num_dofs by n
     Matrix H;                       ///< the fields sampled at the coarse nodes
