@@ -111,26 +111,43 @@ Vector verify_node_distances(const Coarsening& c, const mesh::PointLocator& fine
     return dist;
 }
 
+/// The fine harmonic problem of Eq. 6 on the simplicial fine mesh: its stiffness, boundary and
+/// the normals of the Neumann data. The fine model's own K and boundary serve when the fine mesh
+/// is simplicial already; a split hex/quad mesh gets its own.
+struct FineProblem {
+    SparseMatrix K_split;
+    mesh::Boundary b_split;
+    const SparseMatrix* K = nullptr;
+    const mesh::Boundary* b = nullptr;
+    Matrix normals;
+};
+
+void setup_fine_problem(FineProblem& p, const Coarsening& c, const scene::FineModel& fine) {
+    if (mesh::is_simplex(fine.mesh.type)) {
+        p.K = &fine.K;
+        p.b = &fine.boundary;
+    } else {
+        p.K_split = fem::stiffness_matrix(c.fine, c.fine_materials);
+        p.b_split = mesh::boundary(c.fine);
+        p.K = &p.K_split;
+        p.b = &p.b_split;
+    }
+    p.normals =
+        c.options.coarse_normals ? coarse_boundary_normals(c.fine, *p.b, c.coarse) : p.b->normals;
+}
+
 struct HarmonicPart {
     Matrix h, H;
     std::vector<Mandel6> G_fine, G_coarse, A;
 };
 
-HarmonicPart harmonic_part(const Coarsening& c, const scene::FineModel& fine,
+HarmonicPart harmonic_part(const Coarsening& c, const FineProblem& p,
                            const std::vector<Index>& fixed_dofs, const mesh::PointLocator& locator,
                            Timings* timings) {
     HarmonicPart r;
     {
         const Phase phase("harmonic", timings);
-        const bool split = !mesh::is_simplex(fine.mesh.type);
-        const SparseMatrix K_split =
-            split ? fem::stiffness_matrix(c.fine, c.fine_materials) : SparseMatrix();
-        const mesh::Boundary b_split = split ? mesh::boundary(c.fine) : mesh::Boundary();
-        const SparseMatrix& K = split ? K_split : fine.K;
-        const mesh::Boundary& b = split ? b_split : fine.boundary;
-        const Matrix normals =
-            c.options.coarse_normals ? coarse_boundary_normals(c.fine, b, c.coarse) : b.normals;
-        r.h = harmonic_displacements(c.fine, b, K, normals, fixed_dofs);
+        r.h = harmonic_displacements(c.fine, *p.b, *p.K, p.normals, fixed_dofs);
     }
     const Phase phase("tensors", timings);
     r.G_fine = mollifiers(c.fine, r.h);
@@ -224,9 +241,14 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
                  "{}: coarse.boundary: \"mixed\" needs fixed nodes, but the scene has no "
                  "dirichlet boxes",
                  scene.source);
+    FineProblem problem;
+    {
+        const Phase phase("harmonic", &c.timings);
+        setup_fine_problem(problem, c, fine);
+    }
     const std::vector<Index> no_fixed;
-    HarmonicPart part = harmonic_part(c, fine, c.options.mixed_boundary ? fine.bc.dofs : no_fixed,
-                                      fine_locator, &c.timings);
+    HarmonicPart part = harmonic_part(
+        c, problem, c.options.mixed_boundary ? fine.bc.dofs : no_fixed, fine_locator, &c.timings);
     c.h = std::move(part.h);
     c.H = std::move(part.H);
     c.G_fine = std::move(part.G_fine);
@@ -238,7 +260,7 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
     for (Index q = 0; q < c.coarse.num_elements(); ++q)
         if (mollifier_singular(dim, c.G_coarse[q], scale)) singular.push_back(q);
     if (c.options.mixed_boundary && !singular.empty()) {
-        HarmonicPart neumann = harmonic_part(c, fine, no_fixed, fine_locator, &c.timings);
+        HarmonicPart neumann = harmonic_part(c, problem, no_fixed, fine_locator, &c.timings);
         for (Index q : singular) {
             c.G_coarse[q] = neumann.G_coarse[q];
             c.A[q] = neumann.A[q];
@@ -333,7 +355,11 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
         if (effective && c.options.harmonic_map) {
             std::vector<Index> carrier(loc.size());
             for (std::size_t i = 0; i < loc.size(); ++i) carrier[i] = loc[i].element;
-            const HarmonicMap map(c.coarse, c.H, fine.mesh.rest_positions, c.h, carrier);
+            // Fallback elements have singular mixed fields; the pure-Neumann ones span the same
+            // strains elsewhere up to the clamp's local effect (Eq. 8 depends only on the span).
+            const bool neumann = !c.fallback.empty();
+            const HarmonicMap map(c.coarse, neumann ? c.H_neumann : c.H, fine.mesh.rest_positions,
+                                  neumann ? c.h_neumann : c.h, carrier);
             m.to_fine = map.linearized();
         } else {
             m.to_fine = barycentric_embedding(c.coarse, loc);

@@ -278,7 +278,9 @@ TEST(EffectiveTensor, MixedBoundaryFallsBackWhereTheClampPinsAnEdge) {
          {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
          {"loads", {{"gravity", {0, 0, -1}}}},
          {"coarse",
-          {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {4, 2, 2}, "tet")}, {"boundary", "mixed"}}}});
+          {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {4, 2, 2}, "tet")},
+           {"boundary", "mixed"},
+           {"map", "harmonic"}}}});
     const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
     std::vector<Index> pinned;
     for (Index q = 0; q < c.coarse.num_elements(); ++q) {
@@ -291,6 +293,12 @@ TEST(EffectiveTensor, MixedBoundaryFallsBackWhereTheClampPinsAnEdge) {
     EXPECT_EQ(c.report["fallback_elements"].get<std::vector<Index>>(), pinned);
     EXPECT_LT(eq5_defect(c), 1e-10);
     EXPECT_GT(spd_figures(c).first, 0.0);
+    // The harmonic coarse-to-fine map (built from the pure-Neumann fields, since elements fell
+    // back) carries rigid motions exactly.
+    const coarsen::CoarseModel m = homogenize::coarse_model(s.scene, s.fine, c);
+    const Matrix rigid_fine = test::rigid_modes(s.fine.mesh.rest_positions);
+    EXPECT_LT((m.to_fine * test::rigid_modes(c.coarse.rest_positions) - rigid_fine).norm(),
+              1e-10 * rigid_fine.norm());
 }
 
 // Bad input: each error names what is wrong.

@@ -30,6 +30,8 @@ struct Options {
     /// coarse.map: "barycentric" (default) or "harmonic": which coarse-to-fine map becomes
     /// CoarseModel::to_fine (the harmonic one linearized, HarmonicMap::linearized). Only the
     /// effective-tensor method has harmonic fields; the baselines always embed barycentrically.
+    /// With a mixed boundary where elements fell back, the map uses the pure-Neumann fields
+    /// (the mixed ones are singular on those elements).
     bool harmonic_map = false;
 };
 
