@@ -3,6 +3,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <optional>
 
 #include "../scene/json_reader.hpp"
 #include "coarsegrain/fem/assembly.hpp"
@@ -207,13 +208,14 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
     }
     c.coarse_measures = element_measures(c.coarse);
 
-    const mesh::PointLocator fine_locator(c.fine);
+    std::optional<mesh::PointLocator> fine_locator;
     Vector outside;
     {
         const Phase phase("intersect", &c.timings);
+        fine_locator.emplace(c.fine);
         c.overlaps = mesh::intersect(c.fine, c.coarse);
         verify_overlaps(c, scene.source);
-        outside = verify_node_distances(c, fine_locator, where);
+        outside = verify_node_distances(c, *fine_locator, where);
         c.element_mass =
             coarse_element_masses(c.fine_materials, c.overlaps, c.coarse.num_elements());
     }
@@ -248,7 +250,7 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
     }
     const std::vector<Index> no_fixed;
     HarmonicPart part = harmonic_part(
-        c, problem, c.options.mixed_boundary ? fine.bc.dofs : no_fixed, fine_locator, &c.timings);
+        c, problem, c.options.mixed_boundary ? fine.bc.dofs : no_fixed, *fine_locator, &c.timings);
     c.h = std::move(part.h);
     c.H = std::move(part.H);
     c.G_fine = std::move(part.G_fine);
@@ -260,7 +262,7 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
     for (Index q = 0; q < c.coarse.num_elements(); ++q)
         if (mollifier_singular(dim, c.G_coarse[q], scale)) singular.push_back(q);
     if (c.options.mixed_boundary && !singular.empty()) {
-        HarmonicPart neumann = harmonic_part(c, problem, no_fixed, fine_locator, &c.timings);
+        HarmonicPart neumann = harmonic_part(c, problem, no_fixed, *fine_locator, &c.timings);
         for (Index q : singular) {
             c.G_coarse[q] = neumann.G_coarse[q];
             c.A[q] = neumann.A[q];

@@ -18,8 +18,8 @@ namespace coarsegrain::io {
 /// Name of the Voigt entry (I, J), 0-based indices: "C_voigt_<I+1><J+1>" with I <= J.
 std::string voigt_field_name(int I, int J);
 
-/// Appends the C_voigt_IJ and density cell fields of one material per element.
-/// @throws Error if mats does not have one entry per element of a mesh with `elements` cells
+/// Appends the C_voigt_IJ and density cell fields of one material per element (write_vtu checks
+/// that their length matches the mesh's elements).
 void add_element_material_fields(VtuFields& fields, const material::ElementMaterials& mats);
 
 /// True if the cell fields hold every C_voigt_IJ of dimension dim (and then density must be
