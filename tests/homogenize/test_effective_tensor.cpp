@@ -243,6 +243,31 @@ TEST(EffectiveTensor, CoarseModelFileSimulatesWithoutTheFineMesh) {
     const coarsen::CoarseModel m =
         homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor");
     ASSERT_EQ(m.outputs.front().file, "coarse_model.vtu");
+    // harmonic.vtu: the fine mesh with the six harmonic displacements as point vectors.
+    ASSERT_EQ(m.outputs.size(), 2u);
+    EXPECT_EQ(m.outputs[1].file, "harmonic.vtu");
+    EXPECT_EQ(m.outputs[1].mesh.num_nodes(), s.fine.mesh.num_nodes());
+    std::vector<std::string> names;
+    for (const io::Field& f : m.outputs[1].fields.point_data) names.push_back(f.name);
+    EXPECT_EQ(names, (std::vector<std::string>{"h_xx", "h_yy", "h_zz", "h_yz", "h_xz", "h_xy"}));
+    // coarse_model.vtu: the directional Young's moduli are those of the stored tensors.
+    const io::VtuFields& fields = m.outputs[0].fields;
+    auto cell = [&](const std::string& name) -> const Matrix& {
+        for (const io::Field& f : fields.cell_data)
+            if (f.name == name) return f.values;
+        ADD_FAILURE() << "no cell field " << name;
+        return fields.cell_data.front().values;
+    };
+    for (Index q = 0; q < m.elements; ++q) {
+        Matrix C_voigt(6, 6);
+        for (int I = 0; I < 6; ++I)
+            for (int J = I; J < 6; ++J)
+                C_voigt(I, J) = C_voigt(J, I) =
+                    cell(fmt::format("C_voigt_{}{}", I + 1, J + 1))(q, 0);
+        const Matrix C = material::voigt_to_mandel(C_voigt);
+        EXPECT_NEAR(cell("E_z")(q, 0), material::directional_young(C, Eigen::Vector3d(0, 0, 1)),
+                    1e-12 * cell("E_z")(q, 0));
+    }
     const std::string dir = test::temp_dir("coarse_model_file");
     io::write_vtu(dir + "/coarse_model.vtu", m.outputs.front().mesh, m.outputs.front().fields);
     const test::Setup back = test::setup({{"mesh", {{"file", dir + "/coarse_model.vtu"}}},
@@ -299,6 +324,23 @@ TEST(EffectiveTensor, MixedBoundaryFallsBackWhereTheClampPinsAnEdge) {
     const Matrix rigid_fine = test::rigid_modes(s.fine.mesh.rest_positions);
     EXPECT_LT((m.to_fine * test::rigid_modes(c.coarse.rest_positions) - rigid_fine).norm(),
               1e-10 * rigid_fine.norm());
+}
+
+// The guard of Eq. 8: a coarse mollifier with a direction it does not strain is singular relative
+// to the fine mollifiers' scale, and inverting an exactly singular one names the element.
+TEST(EffectiveTensor, SingularCoarseMollifierIsDetected) {
+    Mandel6 G = Mandel6::Zero();
+    G.topLeftCorner(6, 6) = test::random_spd_tensor(6, 2).inverse();
+    const double scale = G.norm();
+    EXPECT_FALSE(homogenize::mollifier_singular(3, G, scale));
+    Mandel6 flat = G;
+    flat.col(4).setZero();  // no response to the xz load
+    EXPECT_TRUE(homogenize::mollifier_singular(3, flat, scale));
+    flat.col(4) = 1e-12 * G.col(4);  // round-off sized
+    EXPECT_TRUE(homogenize::mollifier_singular(3, flat, scale));
+    std::vector<Mandel6> A(2, Mandel6::Identity()), Gs = {G, Mandel6::Zero()};
+    test::expect_error([&] { homogenize::effective_tensors(3, A, Gs); },
+                       "coarse mollifier of coarse element 1 is singular");
 }
 
 // Bad input: each error names what is wrong.
