@@ -35,18 +35,36 @@ void truncate_rows(SparseMatrix& M, double tau);
 /// Drops off-diagonal entries with |A_ij| < tau sqrt(|A_ii A_jj|) (keeps A symmetric).
 void truncate_symmetric(SparseMatrix& A, double tau);
 
+/// Rigid motions of the finest grid on its present DOFs: dim translations, then the
+/// infinitesimal rotations about the origin (1 in 2D: u = (-y, x); 3 in 3D: u = omega x x), with
+/// positions in units of `unit` (#fine_dofs by dim + dim(dim-1)/2).
+Matrix fine_rigid_modes(int dim, const Eigen::Vector3i& cells, const Eigen::Vector3d& spacing,
+                        double unit, const IndexVector& fine_dofs);
+
 /// Translation and rotation invariance correction (Sec. 3.5) of C̃ (#coarse_dofs by
-/// #fine_dofs), in place, keeping its sparsity pattern. For every fine DOF (j, c) whose node is
-/// not skipped, the entries of column (j, c) get the smallest change (Euclidean norm) after
-/// which, with T_i = C̃_ij^T the blocks that carry coarse node i to fine node j,
-///   sum_i T_i = I   and   sum_i T_i R(x_i - x_j) = 0,
-/// R(d) = -[d]_x (3D) or (-d_y, d_x)^T (2D) mapping a rotation vector to the displacement at
-/// offset d; row c of these conditions only involves column (j, c). Together they say that a
-/// coarse constant displacement and a coarse infinitesimal rotation u_i = omega x x_i map to the
-/// same motion at fine node j (NOTES.md: sum_i C̃_ij^T [x_i]_x = [x_j]_x).
-/// @param[in] skip_fine  per level-(k+1) node: do not correct its columns
+/// #fine_dofs), in place, keeping its sparsity pattern.
+///
+/// A fine rigid motion r has coefficients Rig^{k+1} at level k+1 and, since C C̃^T = I,
+/// Rig^k = C^k Rig^{k+1} at level k (the measurements of Eq. 9). Invariance asks that the coarse
+/// representation map back to the motion itself, C̃^T Rig^k = Rig^{k+1}. For Dirac refinement the
+/// coefficients are nodal values and this is the printed condition (NOTES.md: sum_i C̃_ij^T = I
+/// and sum_i C̃_ij^T [x_i]_x = [x_j]_x for every fine node j); for the linear refinement the
+/// coefficients are weighted sums over the stencil (2^dim times the nodal value in the interior,
+/// so the global C̃ has column sums 2^-dim, not 1), and the printed form would be wrong.
+///
+/// Row (j, c) of the condition only involves column (j, c) of C̃: for every column whose node is
+/// not skipped, the entries get the smallest change (Euclidean norm) that satisfies it,
+/// delta = N (N^T N)^+ (t - N^T x) with N the rows of Rig^k at the column's entries, t the row
+/// of Rig^{k+1} and x the current values. The rotations are taken about x_j (and scaled by
+/// `rotation_scale`) so that N^T N is well conditioned; this is an equivalent set of constraints.
+/// @param[in] skip_fine       per level-(k+1) node: do not correct its columns
+/// @param[in] rig_coarse      Rig^k, #coarse_dofs by m
+/// @param[in] rig_fine        Rig^{k+1}, #fine_dofs by m
+/// @param[in] fine_positions  per level-(k+1) node, its position in the units of the modes
 /// @return per level-(k+1) node, 1 if its columns were corrected
 std::vector<char> correct_invariance(SparseMatrix& Ct, const StepGeometry& g,
-                                     const std::vector<char>& skip_fine);
+                                     const std::vector<char>& skip_fine, const Matrix& rig_coarse,
+                                     const Matrix& rig_fine, const Matrix& fine_positions,
+                                     double rotation_scale);
 
 }  // namespace coarsegrain::mra::detail

@@ -29,6 +29,38 @@ SparseMatrix principal_submatrix(const SparseMatrix& K, const IndexVector& keep)
     return out;
 }
 
+/// Operands denser than this (and small enough to hold densely) are multiplied as dense
+/// matrices: global solves make C̃, Φ and A dense, and Eigen's sparse-sparse product of dense
+/// operands is 20-50x slower than a dense product (measured on the 32x32 grid: 1.4 s vs 0.04 s
+/// for A^4 = C̃ A C̃^T).
+constexpr double kDenseProductDensity = 0.05;
+constexpr double kDenseProductMaxEntries = 2e7;
+
+bool dense_enough(const SparseMatrix& M) {
+    const double size = static_cast<double>(M.rows()) * static_cast<double>(M.cols());
+    return size > 0 && size <= kDenseProductMaxEntries &&
+           static_cast<double>(M.nonZeros()) > kDenseProductDensity * size;
+}
+
+/// X Y, through dense arithmetic when the operands are dense (exact zeros are not stored).
+SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y) {
+    if (!dense_enough(Y)) {
+        if (dense_enough(X)) {
+            SparseMatrix out = Matrix(Matrix(X) * Y).sparseView(0.0, 0.0);
+            out.makeCompressed();
+            return out;
+        }
+        SparseMatrix P = X * Y;
+        P.makeCompressed();
+        return P;
+    }
+    const Matrix Yd = Matrix(Y);
+    const Matrix P = dense_enough(X) ? Matrix(Matrix(X) * Yd) : Matrix(X * Yd);
+    SparseMatrix out = P.sparseView(0.0, 0.0);
+    out.makeCompressed();
+    return out;
+}
+
 /// (M + M^T) / 2, compressed.
 SparseMatrix symmetrized(const SparseMatrix& M) {
     SparseMatrix S = 0.5 * (M + SparseMatrix(M.transpose()));
@@ -38,8 +70,7 @@ SparseMatrix symmetrized(const SparseMatrix& M) {
 
 /// M X M^T for symmetric X, exactly symmetric.
 SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X) {
-    const SparseMatrix XMt = X * SparseMatrix(M.transpose());
-    return symmetrized(M * XMt);
+    return symmetrized(product(M, product(X, SparseMatrix(M.transpose()))));
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -157,21 +188,9 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
     }
 
-    // Nodes near the Dirichlet region at level q: fixed nodes and their grid neighbours.
-    const Index fine_nodes = mesh.num_nodes();
-    std::vector<char> near(static_cast<std::size_t>(fine_nodes), 0);
-    for (const Index d : fixed_dofs) {
-        const Eigen::Vector3i x = node_coordinates(d / dim, cells, dim);
-        const Eigen::Vector3i n(cells[0] + 1, cells[1] + 1, dim == 3 ? cells[2] + 1 : 1);
-        const int rz = dim == 3 ? 1 : 0;
-        for (int dz = -rz; dz <= rz; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const Eigen::Vector3i y = x + Eigen::Vector3i(dx, dy, dz);
-                    if ((y.array() < 0).any() || (y.array() >= n.array()).any()) continue;
-                    near[static_cast<std::size_t>(y[0] + n[0] * (y[1] + n[1] * y[2]))] = 1;
-                }
-    }
+    // Finest nodes with a fixed DOF.
+    std::vector<char> fixed_node(static_cast<std::size_t>(mesh.num_nodes()), 0);
+    for (const Index d : fixed_dofs) fixed_node[static_cast<std::size_t>(d / dim)] = 1;
 
     // Φ^q: selection of the present fine DOFs.
     SparseMatrix Phi(h.fine_dofs.size(), n_dofs);
@@ -180,6 +199,11 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         for (Index k = 0; k < h.fine_dofs.size(); ++k) t.emplace_back(k, h.fine_dofs[k], 1.0);
         Phi.setFromTriplets(t.begin(), t.end());
     }
+
+    // Rigid motions on the present DOFs of the current finer level (invariance correction), in
+    // units of the largest fine spacing.
+    const double unit = h.spacing.head(dim).maxCoeff();
+    Matrix rig_next = detail::fine_rigid_modes(dim, cells, h.spacing, unit, h.fine_dofs);
 
     h.levels.resize(static_cast<std::size_t>(q - 1));
     const SparseMatrix* A_next = &h.A_fine;
@@ -217,38 +241,40 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         SparseMatrix R;
         {
             const Phase phase(tag + "B", &h.timings);
-            const SparseMatrix AWt = A * SparseMatrix(L.W.transpose());
-            L.B = symmetrized(L.W * AWt);
-            R = SparseMatrix(AWt.transpose()) * SparseMatrix(L.C_dagger.transpose());
+            const SparseMatrix AWt = product(A, SparseMatrix(L.W.transpose()));
+            L.B = symmetrized(product(L.W, AWt));
+            R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
         }
         SparseMatrix Z;
+        const int rings =
+            std::isinf(L.radius) ? 0
+                                 : static_cast<int>(std::floor(L.radius)) *
+                                       (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
         if (std::isinf(L.radius)) {
             const Phase phase(tag + "Z (B factorize + solves)", &h.timings);
             Z = detail::global_z(L.B, R);
         } else {
             const Phase phase(tag + "Z (localized solves)", &h.timings);
-            const int rings = static_cast<int>(std::floor(L.radius)) *
-                              (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
             Z = detail::localized_z(L.B, R, L.W, g, rings);
         }
         {
             const Phase phase(tag + "C adapted", &h.timings);
-            L.C_adapted = L.C_dagger + Z * L.W;
+            L.C_adapted = L.C_dagger + product(Z, L.W);
             L.C_adapted.makeCompressed();
         }
         Z = SparseMatrix();
 
-        // Coarse nodes whose basis function reaches the Dirichlet region.
+        // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node.
         const Index coarse_nodes = grid_nodes(L.cells, dim);
-        L.dirichlet_affected.assign(static_cast<std::size_t>(coarse_nodes), 0);
-        for (const Index d : L.dropped_dofs) L.dirichlet_affected[static_cast<std::size_t>(d / dim)] = 1;
-        for (Index i = 0; i < coarse_nodes; ++i)
-            if (near[static_cast<std::size_t>(coincident[static_cast<std::size_t>(i)])])
-                L.dirichlet_affected[static_cast<std::size_t>(i)] = 1;
-        for (Index l = 0; l < L.C_adapted.outerSize(); ++l) {
-            if (!near[static_cast<std::size_t>(dofs_next[l] / dim)]) continue;
-            for (SparseMatrix::InnerIterator it(L.C_adapted, l); it; ++it)
-                L.dirichlet_affected[static_cast<std::size_t>(L.dofs[it.row()] / dim)] = 1;
+        L.dirichlet_nodes.assign(static_cast<std::size_t>(coarse_nodes), 0);
+        {
+            const Eigen::Vector3i nq(cells[0] + 1, cells[1] + 1, dim == 3 ? cells[2] + 1 : 1);
+            const int s = 1 << (q - k);
+            for (Index i = 0; i < coarse_nodes; ++i) {
+                const Eigen::Vector3i x = s * node_coordinates(i, L.cells, dim);
+                L.dirichlet_nodes[static_cast<std::size_t>(i)] =
+                    fixed_node[static_cast<std::size_t>(x[0] + nq[0] * (x[1] + nq[1] * x[2]))];
+            }
         }
 
         if (options.truncation > 0) {
@@ -257,22 +283,48 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
         if (options.invariance) {
             const Phase phase(tag + "invariance", &h.timings);
-            // Skip fine nodes near the Dirichlet region, with an absent DOF, or in the support
-            // of an affected coarse node.
+            // Skip fine nodes with an absent DOF, and (Sec. 3.5) those in the support of a
+            // coarse node on the Dirichlet boundary: within `reach` rings of it, the extent of
+            // a localized row of C̃ (the region R_i, plus one ring for the wavelets of the linear
+            // refinement; every node for global solves). This is geometric so that it also
+            // applies to eliminated boundary nodes, which have no row.
             const Index fine_count = grid_nodes(fine_cells, dim);
-            std::vector<char> skip(near);
+            std::vector<char> skip(static_cast<std::size_t>(fine_count), 0);
             std::vector<int> present_count(static_cast<std::size_t>(fine_count), 0);
             for (Index l = 0; l < dofs_next.size(); ++l)
                 ++present_count[static_cast<std::size_t>(dofs_next[l] / dim)];
             for (Index j = 0; j < fine_count; ++j)
-                if (present_count[static_cast<std::size_t>(j)] != dim) skip[static_cast<std::size_t>(j)] = 1;
-            for (Index l = 0; l < L.C_adapted.outerSize(); ++l)
-                for (SparseMatrix::InnerIterator it(L.C_adapted, l); it; ++it)
-                    if (L.dirichlet_affected[static_cast<std::size_t>(L.dofs[it.row()] / dim)])
-                        skip[static_cast<std::size_t>(dofs_next[l] / dim)] = 1;
-            L.invariance_applied = detail::correct_invariance(L.C_adapted, g, skip);
+                if (present_count[static_cast<std::size_t>(j)] != dim)
+                    skip[static_cast<std::size_t>(j)] = 1;
+            const Eigen::Vector3i nf(fine_cells[0] + 1, fine_cells[1] + 1,
+                                     dim == 3 ? fine_cells[2] + 1 : 1);
+            const int reach = std::isinf(L.radius)
+                                  ? nf.maxCoeff()
+                                  : rings + (options.refinement == Refinement::Linear ? 1 : 0);
+            for (Index i = 0; i < coarse_nodes; ++i) {
+                if (!L.dirichlet_nodes[static_cast<std::size_t>(i)]) continue;
+                const Eigen::Vector3i c = 2 * node_coordinates(i, L.cells, dim);
+                const Eigen::Vector3i lo = (c.array() - reach).max(0);
+                const Eigen::Vector3i hi = (c.array() + reach).min(nf.array() - 1);
+                for (int z = lo[2]; z <= hi[2]; ++z)
+                    for (int y = lo[1]; y <= hi[1]; ++y)
+                        for (int x = lo[0]; x <= hi[0]; ++x)
+                            skip[static_cast<std::size_t>(x + nf[0] * (y + nf[1] * z))] = 1;
+            }
+            const Matrix rig = L.C * rig_next;
+            Matrix positions(fine_count, 3);
+            for (Index j = 0; j < fine_count; ++j)
+                positions.row(j) = node_coordinates(j, fine_cells, dim)
+                                       .cast<double>()
+                                       .cwiseProduct(g.fine_spacing)
+                                       .transpose() /
+                                   unit;
+            L.invariance_applied = detail::correct_invariance(
+                L.C_adapted, g, skip, rig, rig_next, positions, std::ldexp(1.0, q - k - 1));
+            rig_next = rig;
         } else {
             L.invariance_applied.assign(static_cast<std::size_t>(grid_nodes(fine_cells, dim)), 0);
+            rig_next = L.C * rig_next;
         }
         {
             const Phase phase(tag + "A", &h.timings);
@@ -281,16 +333,13 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
         {
             const Phase phase(tag + "Phi Psi", &h.timings);
-            L.Psi = L.W * Phi;
-            L.Phi = L.C_adapted * Phi;
-            L.Psi.makeCompressed();
-            L.Phi.makeCompressed();
+            L.Psi = product(L.W, Phi);
+            L.Phi = product(L.C_adapted, Phi);
         }
         L.build_seconds = seconds_since(t0);
         Phi = L.Phi;
         A_next = &L.A;
         dofs_next = L.dofs;
-        near = L.dirichlet_affected;
     }
     return h;
 }

@@ -20,6 +20,11 @@ using Triplet = Eigen::Triplet<double, Index>;
 /// #wavelets x 64 doubles.
 constexpr Index kGlobalBlock = 64;
 
+/// Loops shorter than these run on one thread: waking a second thread costs ~20 ms on a loaded
+/// machine (measured: an 18x18 factorization took 24 ms with 2 threads, 0.1 ms with one).
+constexpr Index kMinParallelNodes = 64;
+constexpr Index kMinParallelColumns = 4096;
+
 /// Local systems up to this size are factorized densely (LLT), larger ones by a sparse Cholesky
 /// with AMD ordering.
 constexpr Index kDenseLocalLimit = 400;
@@ -83,7 +88,7 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
     std::vector<std::vector<Triplet>> parts(static_cast<std::size_t>(num_nodes));
     std::exception_ptr error;
     std::mutex mutex;
-#pragma omp parallel
+#pragma omp parallel if (num_nodes >= kMinParallelNodes)
     {
         std::vector<Index> local(static_cast<std::size_t>(nw), -1);
         std::vector<Index> S;
@@ -182,53 +187,69 @@ void truncate_symmetric(SparseMatrix& A, double tau) {
     A.makeCompressed();
 }
 
+namespace {
+
+/// R(x): dim by nrot, the displacement at x of the unit rotations about the origin.
+Matrix rotation_map(int dim, const Eigen::Vector3d& x) {
+    if (dim == 2) return (Matrix(2, 1) << -x[1], x[0]).finished();
+    Matrix R(3, 3);  // omega x x = -[x]_x omega
+    R << 0, x[2], -x[1], -x[2], 0, x[0], x[1], -x[0], 0;
+    return R;
+}
+
+}  // namespace
+
+Matrix fine_rigid_modes(int dim, const Eigen::Vector3i& cells, const Eigen::Vector3d& spacing,
+                        double unit, const IndexVector& fine_dofs) {
+    const int nrot = dim == 3 ? 3 : 1;
+    Matrix R = Matrix::Zero(fine_dofs.size(), dim + nrot);
+    for (Index a = 0; a < fine_dofs.size(); ++a) {
+        const int c = static_cast<int>(fine_dofs[a] % dim);
+        const Eigen::Vector3d x =
+            node_coordinates(fine_dofs[a] / dim, cells, dim).cast<double>().cwiseProduct(spacing) /
+            unit;
+        R(a, c) = 1.0;
+        R.block(a, dim, 1, nrot) = rotation_map(dim, x).row(c);
+    }
+    return R;
+}
+
 std::vector<char> correct_invariance(SparseMatrix& Ct, const StepGeometry& g,
-                                     const std::vector<char>& skip_fine) {
+                                     const std::vector<char>& skip_fine, const Matrix& rig_coarse,
+                                     const Matrix& rig_fine, const Matrix& fine_positions,
+                                     double rotation_scale) {
     const int dim = g.dim;
     const int nrot = dim == 3 ? 3 : 1;
     const int m = dim + nrot;
     const Index num_fine = grid_nodes(g.fine_cells, dim);
     std::vector<char> applied(static_cast<std::size_t>(num_fine), 0);
-    // Offsets in units of the largest spacing keep N^T N well scaled.
-    const Eigen::Vector3d h = g.fine_spacing / g.fine_spacing.head(dim).maxCoeff();
     const Index ncols = static_cast<Index>(Ct.cols());
     Ct.makeCompressed();
     const Index* outer = Ct.outerIndexPtr();
     const Index* inner = Ct.innerIndexPtr();
     double* value = Ct.valuePtr();
     std::vector<char> done(static_cast<std::size_t>(ncols), 0);
-#pragma omp parallel for schedule(dynamic, 64)
+#pragma omp parallel for schedule(dynamic, 64) if (ncols >= kMinParallelColumns)
     for (Index l = 0; l < ncols; ++l) {
-        const Index fdof = g.fine_dofs[l];
-        const Index j = fdof / dim;
-        const int c = static_cast<int>(fdof % dim);
+        const Index j = g.fine_dofs[l] / dim;
         if (skip_fine[static_cast<std::size_t>(j)]) continue;
-        const Eigen::Vector3i xj = node_coordinates(j, g.fine_cells, dim);
+        // Modes about x_j: rotation columns minus the translation columns times R(x_j).
+        const Eigen::Vector3d xj = fine_positions.row(j).transpose();
+        const Matrix Rj = rotation_map(dim, xj);
+        const auto local = [&](const Eigen::RowVectorXd& row) {
+            Eigen::RowVectorXd out = row;
+            out.tail(nrot) = (row.tail(nrot) - row.head(dim) * Rj) / rotation_scale;
+            return out;
+        };
         const Index nnz = outer[l + 1] - outer[l];
-        // N[(i,r), :] = row r of M_i = [I, R(x_i - x_j)].
-        Matrix N = Matrix::Zero(nnz, m);
-        Vector t(nnz);
+        Matrix N(nnz, m);
+        Vector x(nnz);
         for (Index p = 0; p < nnz; ++p) {
-            const Index cdof = g.coarse_dofs[inner[outer[l] + p]];
-            const Index i = cdof / dim;
-            const int r = static_cast<int>(cdof % dim);
-            const Eigen::Vector3i xi = 2 * node_coordinates(i, g.coarse_cells, dim);
-            const Eigen::Vector3d d = (xi - xj).cast<double>().cwiseProduct(h);
-            N(p, r) = 1.0;
-            if (dim == 3) {
-                // -[d]_x: row r of the map omega -> omega x d = -d x omega.
-                Eigen::Matrix3d cross;
-                cross << 0, -d[2], d[1], d[2], 0, -d[0], -d[1], d[0], 0;
-                N.block(p, 3, 1, 3) = -cross.row(r);
-            } else {
-                N(p, 2) = r == 0 ? -d[1] : d[0];
-            }
-            t[p] = value[outer[l] + p];
+            N.row(p) = local(rig_coarse.row(inner[outer[l] + p]));
+            x[p] = value[outer[l] + p];
         }
-        Vector target = Vector::Zero(m);
-        target[c] = 1.0;
-        const Vector residual = target - N.transpose() * t;
-        // Minimum-norm change delta with N^T delta = residual: delta = N (N^T N)^+ residual.
+        const Vector residual = local(rig_fine.row(l)).transpose() - N.transpose() * x;
+        // Minimum-norm change: delta = N (N^T N)^+ residual.
         const Eigen::SelfAdjointEigenSolver<Matrix> eig(N.transpose() * N);
         const Vector& lambda = eig.eigenvalues();
         const double cut = 1e-12 * std::max(lambda.maxCoeff(), 1e-300);
@@ -239,7 +260,8 @@ std::vector<char> correct_invariance(SparseMatrix& Ct, const StepGeometry& g,
         done[static_cast<std::size_t>(l)] = 1;
     }
     for (Index l = 0; l < ncols; ++l)
-        if (done[static_cast<std::size_t>(l)]) applied[static_cast<std::size_t>(g.fine_dofs[l] / dim)] = 1;
+        if (done[static_cast<std::size_t>(l)])
+            applied[static_cast<std::size_t>(g.fine_dofs[l] / dim)] = 1;
     return applied;
 }
 

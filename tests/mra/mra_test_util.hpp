@@ -33,11 +33,12 @@ using MaterialPattern = std::function<int(const Eigen::VectorXd& centroid)>;
 
 /// A grid over the unit square/cube (or [0, size]) with two isotropic materials (E_soft, E_stiff,
 /// nu = 0.3) given by `pattern`, fixed on the face y = max (hung from its top), under gravity
-/// (0, -1[, 0]) and a pull (1, 0.5[, 0.25]) on the face y = 0 so that every displacement
-/// component is excited.
+/// (0, -1[, 0]) and, if `pull`, a traction (1, 0.5[, 0.25]) on the face y = 0 so that every
+/// displacement component is excited.
 inline GridProblem hung_problem(int dim, const Eigen::Vector3i& cells, double E_soft,
                                 double E_stiff, const MaterialPattern& pattern,
-                                const Eigen::Vector3d& size = Eigen::Vector3d::Ones()) {
+                                const Eigen::Vector3d& size = Eigen::Vector3d::Ones(),
+                                bool pull = true) {
     GridProblem p;
     const Eigen::VectorXd lo = Eigen::VectorXd::Zero(dim);
     const Eigen::VectorXd hi = size.head(dim);
@@ -66,7 +67,7 @@ inline GridProblem hung_problem(int dim, const Eigen::Vector3i& cells, double E_
     Eigen::VectorXd traction(dim);
     traction << 1.0, 0.5;
     if (dim == 3) traction << 1.0, 0.5, 0.25;
-    p.f += fem::traction_load(p.mesh, b, bottom, traction);
+    if (pull) p.f += fem::traction_load(p.mesh, b, bottom, traction);
     box_lo = lo.array() - 1e-9;
     box_hi = hi.array() + 1e-9;
     box_lo[1] = hi[1] - 1e-9;

@@ -98,10 +98,9 @@ struct Level {
     double radius = 0;         ///< rho used for this step
     /// Per node of level k+1: 1 if the invariance correction was applied to its columns of C̃.
     std::vector<char> invariance_applied;
-    /// Per node of level k: 1 if its basis function reaches the Dirichlet region (its support
-    /// meets a fixed node or its neighbours at level k+1, or a node affected at level k+1); the
-    /// columns of C̃ that such a node touches are not corrected.
-    std::vector<char> dirichlet_affected;
+    /// Per node of level k: 1 if it lies on a fixed node of the finest grid. The invariance
+    /// correction skips the fine nodes within reach of these (Sec. 3.5).
+    std::vector<char> dirichlet_nodes;
     double build_seconds = 0;
 };
 
