@@ -6,7 +6,9 @@
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/loads.hpp"
 #include "coarsegrain/fem/stress.hpp"
+#include "coarsegrain/io/material_fields.hpp"
 #include "coarsegrain/io/mesh_io.hpp"
+#include "coarsegrain/io/vtu.hpp"
 #include "coarsegrain/material/material_field.hpp"
 #include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/mesh/point_locator.hpp"
@@ -33,14 +35,28 @@ mesh::ElementType parse_element(const JsonReader& r) {
     r.fail("unknown element \"{}\"; expected \"hex\", \"tet\", \"quad\" or \"tri\"", s);
 }
 
+// `carried` (if given) receives the per-element materials a .vtu mesh file may carry
+// (io/material_fields.hpp: a coarse model written by `coarsegrain coarsen`).
 mesh::Mesh parse_mesh(const JsonReader& r, const std::optional<int>& dimension,
-                      const std::string& base_dir) {
+                      const std::string& base_dir,
+                      std::map<int, material::Material>* carried = nullptr) {
     r.allow_only({"file", "grid"});
     r.fail_unless(r.has("file") != r.has("grid"), "expected exactly one of \"file\" or \"grid\"");
     if (auto file = r.find("file")) {
         const std::string path = resolve(base_dir, file->string());
         file->fail_unless(fs::exists(path), "mesh file {} does not exist", path);
-        return io::read_mesh(path);
+        if (!carried || fs::path(path).extension() != ".vtu") return io::read_mesh(path);
+        auto [m, fields] = io::read_vtu(path);
+        if (io::has_element_material_fields(fields, m.dim())) {
+            try {
+                *carried = io::element_materials_from_fields(fields, m, path);
+            } catch (const InvalidScene&) {
+                throw;
+            } catch (const Error& e) {
+                file->fail("{}", e.what());
+            }
+        }
+        return m;
     }
     const JsonReader g = r.at("grid");
     g.allow_only({"min", "max", "cells", "element"});
@@ -204,12 +220,19 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
         p->fail_unless(mode == "strain" || mode == "stress", "expected \"strain\" or \"stress\"");
         s.plane = mode == "strain" ? material::PlaneMode::Strain : material::PlaneMode::Stress;
     }
-    s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir);
+    std::map<int, material::Material> carried;
+    s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir, &carried);
     s.dimension = s.mesh.dim();
     root.fail_unless(!dimension || *dimension == s.dimension,
                      "dimension is {} but the mesh is {}D", dimension.value_or(0), s.dimension);
     const int dim = s.dimension;
 
+    if (!carried.empty()) {
+        root.fail_unless(!root.has("materials") && !root.has("material_field"),
+                         "mesh.file carries one elasticity tensor per element (cell fields "
+                         "C_voigt_IJ and density); remove \"materials\" and \"material_field\"");
+        s.materials = std::move(carried);
+    }
     if (auto f = root.find("material_field"))
         s.materials = apply_material_field(*f, s.mesh, s.plane, base_dir);
     if (auto m = root.find("materials")) {

@@ -1,0 +1,95 @@
+#pragma once
+/// @file The effective-tensor coarsening of Kharevych et al. 2009 and its averaging baselines
+/// behind one entry point (DESIGN.md "data flow"): fine model + coarse mesh -> CoarseModel.
+///
+/// Steps (effective-tensor): the fine mesh is split into simplices (hex -> 6 tets, quad -> 2
+/// triangles, same nodes); the exact overlaps |T_p ∩ 𝕋_q| are computed (mesh::intersect); the
+/// global harmonic displacements are solved on the fine mesh (Eq. 6, one factorization); the
+/// fine mollifiers G_p (Sec. 3.5), the coarse-sampled fields ℍ (Sec. 3.2) and the coarse
+/// mollifiers 𝔾_q follow, and Eq. 8 gives one anisotropic tensor per coarse element. The
+/// baselines replace the last three steps by averages over the same overlaps.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "coarsegrain/coarsen/coarse_model.hpp"
+#include "coarsegrain/homogenize/effective_tensor.hpp"
+#include "coarsegrain/scene/scene.hpp"
+
+namespace coarsegrain::homogenize {
+
+/// The scene's "coarse" keys this module reads (values validated by parse_options).
+struct Options {
+    /// coarse.normals: "coarse" (default: the traction of Eq. 6 uses the normal of the nearest
+    /// coarse boundary facet, Sec. 4.2) or "fine" (the fine facet's own normal).
+    bool coarse_normals = true;
+    /// coarse.boundary: "neumann" (default, Eq. 6) or "mixed" (Sec. 3.8: the harmonic
+    /// displacements vanish on the scene's Dirichlet nodes; coarse elements whose mollifier is
+    /// then singular fall back to the pure-Neumann one).
+    bool mixed_boundary = false;
+    /// coarse.map: "barycentric" (default) or "harmonic": which coarse-to-fine map becomes
+    /// CoarseModel::to_fine (the harmonic one linearized, HarmonicMap::linearized). Only the
+    /// effective-tensor method has harmonic fields; the baselines always embed barycentrically.
+    /// With a mixed boundary where elements fell back, the map uses the pure-Neumann fields
+    /// (the mixed ones are singular on those elements).
+    bool harmonic_map = false;
+};
+
+/// Reads and validates coarse.normals, coarse.boundary and coarse.map.
+/// @throws InvalidScene naming coarse.<key> and the allowed values
+Options parse_options(const scene::Scene& scene);
+
+/// Everything a coarsening computes (tests and diagnostics read the intermediate results).
+struct Coarsening {
+    std::string method;
+    Options options;
+    mesh::Mesh fine;                            ///< simplicial fine mesh (the scene's, split)
+    material::ElementMaterials fine_materials;  ///< materials of `fine`
+    mesh::Mesh coarse;                          ///< simplicial coarse mesh (coarse.mesh, split)
+    std::vector<mesh::Overlap> overlaps;        ///< mesh::intersect(fine, coarse)
+    Vector coarse_measures;                     ///< #Ec |𝕋_q|
+    Vector element_mass;                        ///< #Ec fine mass inside each coarse element
+    std::vector<Mandel6> C;                     ///< #Ec coarse tensors (Eq. 8 or an average)
+    // Effective-tensor method only:
+    Matrix h;                       ///< fine harmonic fields, fine num_dofs by n
+    Matrix H;                       ///< the fields sampled at the coarse nodes
+    std::vector<Mandel6> G_fine;    ///< #E fine mollifiers G_p
+    std::vector<Mandel6> G_coarse;  ///< #Ec coarse mollifiers 𝔾_q used in Eq. 8
+    std::vector<Mandel6> A;         ///< #Ec energy averages <G^T C G>_q used in Eq. 8
+    /// Mixed boundary: coarse elements that fell back to the pure-Neumann mollifier, and the
+    /// pure-Neumann fields behind them (empty if none fell back).
+    std::vector<Index> fallback;
+    Matrix h_neumann, H_neumann;
+    std::vector<Mandel6> G_fine_neumann;
+    Timings timings;  ///< phases "intersect", "harmonic", "tensors"
+    nlohmann::json report = nlohmann::json::object();
+};
+
+/// Runs a coarsening method on the scene's coarse mesh.
+/// @param[in] method  "effective-tensor", "naive", "voigt" or "reuss"
+/// @throws InvalidScene for an unknown method, a missing coarse.mesh or a bad coarse.* value
+/// @throws Error if the coarse mesh is degenerate, does not overlap the fine mesh (e.g. other
+///         units), misses part of it, holds an element without fine material or a node far
+///         outside it, or if a coarse mollifier is singular (naming the coarse element)
+Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
+                      const std::string& method);
+
+/// The coarse model of a method (the CLI's `coarsen` calls this): coarse stiffness from one
+/// anisotropic material per coarse element (fem::stiffness_matrix), lumped mass from the fine
+/// density over the overlaps, load f = gravity on that mass + the scene's traction boxes on the
+/// coarse boundary, Dirichlet conditions from the scene's boxes on the coarse nodes, to_fine =
+/// barycentric embedding of the fine nodes (or the linearized harmonic map, coarse.map), and
+/// the outputs coarse_model.vtu (coarse mesh; cell fields C_voigt_IJ, density, E_x/E_y/E_z
+/// directional Young's moduli, and for the effective-tensor method G_condition, plus fallback
+/// for a mixed boundary) and, for the effective-tensor method, harmonic.vtu (fine mesh; point
+/// fields h_xx, h_yy, ...). Timings: "intersect", "harmonic", "tensors", "assemble", "maps".
+/// @throws InvalidScene if a dirichlet box selects no coarse node or a traction box no coarse
+///         boundary facet; everything coarsening throws
+coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
+                                        const std::string& method);
+
+/// The coarse model of a finished coarsening (build_coarse_model = this after coarsening).
+coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
+                                  Coarsening c);
+
+}  // namespace coarsegrain::homogenize

@@ -1,0 +1,47 @@
+#pragma once
+/// @file Solves with the material-adapted hierarchy (Chen et al. 2019, Sec. 3.6 and 4.1).
+#include <memory>
+#include <vector>
+
+#include "coarsegrain/mra/hierarchy.hpp"
+#include "coarsegrain/solve/spd_solver.hpp"
+
+namespace coarsegrain::mra {
+
+/// Static solves on a hierarchy. Factorizations of A^k and B^k are computed on first use and
+/// kept, so further right-hand sides cost only coarse-graining, back-substitutions and the
+/// products with Φ and Ψ. Vectors in and out are over all fine grid DOFs (interleaved); entries
+/// of eliminated Dirichlet DOFs are ignored on input and zero on output. Not thread-safe.
+class MultilevelSolver {
+  public:
+    /// Keeps a reference to `h`, which must outlive the solver.
+    explicit MultilevelSolver(const Hierarchy& h);
+    ~MultilevelSolver();
+    MultilevelSolver(MultilevelSolver&&) noexcept;
+
+    /// Multilevel solve (Sec. 3.6) with the wavelets of levels 1..m-1: g^k = C̃^k g^{k+1},
+    /// B^k w^k = W^k g^{k+1}, A^1 v^1 = g^1, u = Φ^{1,T} v^1 + sum_{k<m} Ψ^{k,T} w^k. With
+    /// m = q (all levels) this reproduces the fine solution A^q u = g^q when the wavelets are
+    /// exactly A-orthogonal to the basis (global solves, no truncation or correction: Eq. 12);
+    /// with m = 1 it is the coarsest solve.
+    /// @throws Error if m is not in 1..q or g has the wrong size
+    Vector solve_levels(const Vector& g_fine, int m);
+    Vector solve(const Vector& g_fine) { return solve_levels(g_fine, m_h.num_levels()); }
+
+    /// Single coarse level k (Sec. 4.1): A^k u^k = g^k, u = Φ^{k,T} u^k (k = q: the fine solve).
+    Vector solve_level(const Vector& g_fine, int k);
+
+    /// Factorizes A^k / B^k now (otherwise on first use).
+    void factorize_level(int k);
+    void factorize_wavelets(int k);
+
+  private:
+    const Hierarchy& m_h;
+    std::vector<std::unique_ptr<solve::SpdSolver>> m_A;  ///< index k-1, k = 1..q
+    std::vector<std::unique_ptr<solve::SpdSolver>> m_B;  ///< index k-1, k = 1..q-1
+};
+
+/// Fine vector over all grid DOFs from one over the hierarchy's fine DOFs (zeros elsewhere).
+Vector expand_fine(const Hierarchy& h, const Vector& u_present);
+
+}  // namespace coarsegrain::mra

@@ -1,0 +1,70 @@
+#pragma once
+// Steps of Algorithm 1 (private to src/mra): the solves for Z (global and localized), the
+// invariance correction and the truncation.
+#include <vector>
+
+#include "coarsegrain/common/types.hpp"
+
+namespace coarsegrain::mra::detail {
+
+/// Geometry of one step (level k+1 -> level k) on the regular grids.
+struct StepGeometry {
+    int dim = 3;
+    Eigen::Vector3i fine_cells;    ///< cells of level k+1
+    Eigen::Vector3i coarse_cells;  ///< cells of level k
+    Eigen::Vector3d fine_spacing;  ///< cell size of level k+1
+    IndexVector fine_dofs;         ///< present DOFs of level k+1 (grid DOF indices, sorted)
+    IndexVector coarse_dofs;       ///< kept DOFs of level k (grid DOF indices, sorted)
+};
+
+/// Z of Algorithm 1 line 3 with global solves: B Z^T = -R, R = W A C^{†,T}, using one CHOLMOD
+/// factorization of B and blocks of columns of R. #coarse_dofs by #wavelets.
+SparseMatrix global_z(const SparseMatrix& B, const SparseMatrix& R);
+
+/// Z with localized solves (Sec. 3.5 "Fast computation"): for each coarse node i, the region
+/// R_i holds the level-(k+1) nodes within `rings` grid rings (Chebyshev distance) of the node
+/// coincident with i; S_i are the wavelets (rows of W) with a nonzero on a node of R_i; the rows
+/// of Z for the DOFs of node i solve B[S_i, S_i] z = -R[S_i, DOFs of i] and vanish outside S_i.
+/// The nodes are processed in parallel (OpenMP), each with its own sparse Cholesky factorization.
+SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
+                         const StepGeometry& g, int rings);
+
+/// Drops entries with |M_ij| < tau max_l |M_il| (row-relative).
+void truncate_rows(SparseMatrix& M, double tau);
+
+/// Drops off-diagonal entries with |A_ij| < tau sqrt(|A_ii A_jj|) (keeps A symmetric).
+void truncate_symmetric(SparseMatrix& A, double tau);
+
+/// Rigid motions of the finest grid on its present DOFs: dim translations, then the
+/// infinitesimal rotations about the origin (1 in 2D: u = (-y, x); 3 in 3D: u = omega x x), with
+/// positions in units of `unit` (#fine_dofs by dim + dim(dim-1)/2).
+Matrix fine_rigid_modes(int dim, const Eigen::Vector3i& cells, const Eigen::Vector3d& spacing,
+                        double unit, const IndexVector& fine_dofs);
+
+/// Translation and rotation invariance correction (Sec. 3.5) of C̃ (#coarse_dofs by
+/// #fine_dofs), in place, keeping its sparsity pattern.
+///
+/// A fine rigid motion r has coefficients Rig^{k+1} at level k+1 and, since C C̃^T = I,
+/// Rig^k = C^k Rig^{k+1} at level k (the measurements of Eq. 9). Invariance asks that the coarse
+/// representation map back to the motion itself, C̃^T Rig^k = Rig^{k+1}. For Dirac refinement the
+/// coefficients are nodal values and this is the printed condition (NOTES.md: sum_i C̃_ij^T = I
+/// and sum_i C̃_ij^T [x_i]_x = [x_j]_x for every fine node j); for the linear refinement the
+/// coefficients are weighted sums over the stencil (2^dim times the nodal value in the interior,
+/// so the global C̃ has column sums 2^-dim, not 1), and the printed form would be wrong.
+///
+/// Row (j, c) of the condition only involves column (j, c) of C̃: for every column whose node is
+/// not skipped, the entries get the smallest change (Euclidean norm) that satisfies it,
+/// delta = N (N^T N)^+ (t - N^T x) with N the rows of Rig^k at the column's entries, t the row
+/// of Rig^{k+1} and x the current values. The rotations are taken about x_j (and scaled by
+/// `rotation_scale`) so that N^T N is well conditioned; this is an equivalent set of constraints.
+/// @param[in] skip_fine       per level-(k+1) node: do not correct its columns
+/// @param[in] rig_coarse      Rig^k, #coarse_dofs by m
+/// @param[in] rig_fine        Rig^{k+1}, #fine_dofs by m
+/// @param[in] fine_positions  per level-(k+1) node, its position in the units of the modes
+/// @return per level-(k+1) node, 1 if its columns were corrected
+std::vector<char> correct_invariance(SparseMatrix& Ct, const StepGeometry& g,
+                                     const std::vector<char>& skip_fine, const Matrix& rig_coarse,
+                                     const Matrix& rig_fine, const Matrix& fine_positions,
+                                     double rotation_scale);
+
+}  // namespace coarsegrain::mra::detail

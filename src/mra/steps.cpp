@@ -1,0 +1,268 @@
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <mutex>
+
+#include "coarsegrain/common/error.hpp"
+#include "coarsegrain/mra/refinement.hpp"
+#include "coarsegrain/solve/spd_solver.hpp"
+#include "detail.hpp"
+
+namespace coarsegrain::mra::detail {
+
+namespace {
+
+using Triplet = Eigen::Triplet<double, Index>;
+
+/// Columns of R solved per block in global_z: a block of the dense right-hand side is
+/// #wavelets x 64 doubles.
+constexpr Index kGlobalBlock = 64;
+
+/// Loops shorter than these run on one thread: waking a second thread costs ~20 ms on a loaded
+/// machine (measured: an 18x18 factorization took 24 ms with 2 threads, 0.1 ms with one).
+constexpr Index kMinParallelNodes = 64;
+constexpr Index kMinParallelColumns = 4096;
+
+/// Local systems up to this size are factorized densely (LLT), larger ones by a sparse Cholesky
+/// with AMD ordering.
+constexpr Index kDenseLocalLimit = 400;
+
+/// Solves b x = rhs for a local SPD matrix b (compressed, both triangles).
+Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
+    if (b.rows() <= kDenseLocalLimit) {
+        const Eigen::LLT<Matrix> llt(Matrix(b).selfadjointView<Eigen::Lower>());
+        CG_VERIFY(llt.info() == Eigen::Success,
+                  "mra: a local wavelet stiffness (n = {}) is not positive definite", b.rows());
+        return llt.solve(rhs);
+    }
+    Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>> llt(b);
+    CG_VERIFY(llt.info() == Eigen::Success,
+              "mra: a local wavelet stiffness (n = {}) is not positive definite", b.rows());
+    return llt.solve(rhs);
+}
+
+}  // namespace
+
+SparseMatrix global_z(const SparseMatrix& B, const SparseMatrix& R) {
+    solve::SpdSolver solver;
+    solver.compute(B);
+    const Index nw = static_cast<Index>(R.rows()), nc = static_cast<Index>(R.cols());
+    std::vector<Triplet> t;
+    for (Index c0 = 0; c0 < nc; c0 += kGlobalBlock) {
+        const Index nb = std::min(kGlobalBlock, nc - c0);
+        const Matrix X = solver.solve(Matrix(R.middleCols(c0, nb)));
+        for (Index c = 0; c < nb; ++c)
+            for (Index w = 0; w < nw; ++w)
+                if (X(w, c) != 0.0) t.emplace_back(c0 + c, w, -X(w, c));
+    }
+    SparseMatrix Z(nc, nw);
+    Z.setFromTriplets(t.begin(), t.end());
+    return Z;
+}
+
+SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
+                         const StepGeometry& g, int rings) {
+    const int dim = g.dim;
+    const Index nw = static_cast<Index>(W.rows());
+    const Eigen::Vector3i nf(g.fine_cells[0] + 1, g.fine_cells[1] + 1,
+                             dim == 3 ? g.fine_cells[2] + 1 : 1);
+    const Index fine_grid_dofs = dim * grid_nodes(g.fine_cells, dim);
+    std::vector<Index> fine_local(static_cast<std::size_t>(fine_grid_dofs), -1);
+    for (Index l = 0; l < g.fine_dofs.size(); ++l)
+        fine_local[static_cast<std::size_t>(g.fine_dofs[l])] = l;
+
+    // Kept coarse DOFs grouped by node: rows [first[n], first[n+1]) of Z belong to node nodes[n].
+    std::vector<Index> nodes, first;
+    for (Index r = 0; r < g.coarse_dofs.size(); ++r) {
+        const Index v = g.coarse_dofs[r] / dim;
+        if (nodes.empty() || nodes.back() != v) {
+            nodes.push_back(v);
+            first.push_back(r);
+        }
+    }
+    first.push_back(static_cast<Index>(g.coarse_dofs.size()));
+    const Index num_nodes = static_cast<Index>(nodes.size());
+
+    std::vector<std::vector<Triplet>> parts(static_cast<std::size_t>(num_nodes));
+    std::exception_ptr error;
+    std::mutex mutex;
+#pragma omp parallel if (num_nodes >= kMinParallelNodes)
+    {
+        std::vector<Index> local(static_cast<std::size_t>(nw), -1);
+        std::vector<Index> S;
+#pragma omp for schedule(dynamic, 4)
+        for (Index n = 0; n < num_nodes; ++n) {
+            try {
+                // S: wavelets with a nonzero on a fine node of the region.
+                const Eigen::Vector3i c = 2 * node_coordinates(nodes[static_cast<std::size_t>(n)],
+                                                               g.coarse_cells, dim);
+                const Eigen::Vector3i lo = (c.array() - rings).max(0);
+                const Eigen::Vector3i hi = (c.array() + rings).min(nf.array() - 1);
+                S.clear();
+                for (int z = lo[2]; z <= (dim == 3 ? hi[2] : 0); ++z)
+                    for (int y = lo[1]; y <= hi[1]; ++y)
+                        for (int x = lo[0]; x <= hi[0]; ++x) {
+                            const Index v = x + nf[0] * (y + nf[1] * z);
+                            for (int d = 0; d < dim; ++d) {
+                                const Index l = fine_local[static_cast<std::size_t>(dim * v + d)];
+                                if (l < 0) continue;
+                                for (SparseMatrix::InnerIterator it(W, l); it; ++it) {
+                                    const Index w = static_cast<Index>(it.row());
+                                    if (local[static_cast<std::size_t>(w)] < 0) {
+                                        local[static_cast<std::size_t>(w)] = 0;
+                                        S.push_back(w);
+                                    }
+                                }
+                            }
+                        }
+                std::sort(S.begin(), S.end());
+                const Index ns = static_cast<Index>(S.size());
+                for (Index s = 0; s < ns; ++s) local[static_cast<std::size_t>(S[s])] = s;
+
+                // b = B[S, S] and the right-hand sides R[S, DOFs of the node].
+                SparseMatrix b(ns, ns);
+                std::vector<Triplet> bt;
+                for (Index s = 0; s < ns; ++s)
+                    for (SparseMatrix::InnerIterator it(B, S[static_cast<std::size_t>(s)]); it;
+                         ++it) {
+                        const Index r = local[static_cast<std::size_t>(it.row())];
+                        if (r >= 0) bt.emplace_back(r, s, it.value());
+                    }
+                b.setFromTriplets(bt.begin(), bt.end());
+                const Index r0 = first[static_cast<std::size_t>(n)];
+                const Index nr = first[static_cast<std::size_t>(n) + 1] - r0;
+                Matrix rhs = Matrix::Zero(ns, nr);
+                for (Index q = 0; q < nr; ++q)
+                    for (SparseMatrix::InnerIterator it(R, r0 + q); it; ++it) {
+                        const Index r = local[static_cast<std::size_t>(it.row())];
+                        if (r >= 0) rhs(r, q) = it.value();
+                    }
+                for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
+                if (ns == 0) continue;
+                const Matrix x = local_solve(b, rhs);
+                auto& part = parts[static_cast<std::size_t>(n)];
+                part.reserve(static_cast<std::size_t>(ns * nr));
+                for (Index q = 0; q < nr; ++q)
+                    for (Index s = 0; s < ns; ++s)
+                        if (x(s, q) != 0.0)
+                            part.emplace_back(r0 + q, S[static_cast<std::size_t>(s)], -x(s, q));
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(mutex);
+                if (!error) error = std::current_exception();
+            }
+        }
+    }
+    if (error) std::rethrow_exception(error);
+    std::size_t total = 0;
+    for (const auto& p : parts) total += p.size();
+    std::vector<Triplet> t;
+    t.reserve(total);
+    for (auto& p : parts) {
+        t.insert(t.end(), p.begin(), p.end());
+        std::vector<Triplet>().swap(p);
+    }
+    SparseMatrix Z(static_cast<Index>(g.coarse_dofs.size()), nw);
+    Z.setFromTriplets(t.begin(), t.end());
+    return Z;
+}
+
+void truncate_rows(SparseMatrix& M, double tau) {
+    if (tau <= 0) return;
+    Vector row_max = Vector::Zero(M.rows());
+    for (Index j = 0; j < M.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(M, j); it; ++it)
+            row_max[it.row()] = std::max(row_max[it.row()], std::abs(it.value()));
+    M.prune([&](Index i, Index, double v) { return std::abs(v) >= tau * row_max[i]; });
+    M.makeCompressed();
+}
+
+void truncate_symmetric(SparseMatrix& A, double tau) {
+    if (tau <= 0) return;
+    const Vector d = A.diagonal().cwiseAbs();
+    A.prune([&](Index i, Index j, double v) {
+        return i == j || std::abs(v) >= tau * std::sqrt(d[i] * d[j]);
+    });
+    A.makeCompressed();
+}
+
+namespace {
+
+/// R(x): dim by nrot, the displacement at x of the unit rotations about the origin.
+Matrix rotation_map(int dim, const Eigen::Vector3d& x) {
+    if (dim == 2) return (Matrix(2, 1) << -x[1], x[0]).finished();
+    Matrix R(3, 3);  // omega x x = -[x]_x omega
+    R << 0, x[2], -x[1], -x[2], 0, x[0], x[1], -x[0], 0;
+    return R;
+}
+
+}  // namespace
+
+Matrix fine_rigid_modes(int dim, const Eigen::Vector3i& cells, const Eigen::Vector3d& spacing,
+                        double unit, const IndexVector& fine_dofs) {
+    const int nrot = dim == 3 ? 3 : 1;
+    Matrix R = Matrix::Zero(fine_dofs.size(), dim + nrot);
+    for (Index a = 0; a < fine_dofs.size(); ++a) {
+        const int c = static_cast<int>(fine_dofs[a] % dim);
+        const Eigen::Vector3d x =
+            node_coordinates(fine_dofs[a] / dim, cells, dim).cast<double>().cwiseProduct(spacing) /
+            unit;
+        R(a, c) = 1.0;
+        R.block(a, dim, 1, nrot) = rotation_map(dim, x).row(c);
+    }
+    return R;
+}
+
+std::vector<char> correct_invariance(SparseMatrix& Ct, const StepGeometry& g,
+                                     const std::vector<char>& skip_fine, const Matrix& rig_coarse,
+                                     const Matrix& rig_fine, const Matrix& fine_positions,
+                                     double rotation_scale) {
+    const int dim = g.dim;
+    const int nrot = dim == 3 ? 3 : 1;
+    const int m = dim + nrot;
+    const Index num_fine = grid_nodes(g.fine_cells, dim);
+    std::vector<char> applied(static_cast<std::size_t>(num_fine), 0);
+    const Index ncols = static_cast<Index>(Ct.cols());
+    Ct.makeCompressed();
+    const Index* outer = Ct.outerIndexPtr();
+    const Index* inner = Ct.innerIndexPtr();
+    double* value = Ct.valuePtr();
+    std::vector<char> done(static_cast<std::size_t>(ncols), 0);
+#pragma omp parallel for schedule(dynamic, 64) if (ncols >= kMinParallelColumns)
+    for (Index l = 0; l < ncols; ++l) {
+        const Index j = g.fine_dofs[l] / dim;
+        if (skip_fine[static_cast<std::size_t>(j)]) continue;
+        // Modes about x_j: rotation columns minus the translation columns times R(x_j).
+        const Eigen::Vector3d xj = fine_positions.row(j).transpose();
+        const Matrix Rj = rotation_map(dim, xj);
+        const auto local = [&](const Eigen::RowVectorXd& row) {
+            Eigen::RowVectorXd out = row;
+            out.tail(nrot) = (row.tail(nrot) - row.head(dim) * Rj) / rotation_scale;
+            return out;
+        };
+        const Index nnz = outer[l + 1] - outer[l];
+        Matrix N(nnz, m);
+        Vector x(nnz);
+        for (Index p = 0; p < nnz; ++p) {
+            N.row(p) = local(rig_coarse.row(inner[outer[l] + p]));
+            x[p] = value[outer[l] + p];
+        }
+        const Vector residual = local(rig_fine.row(l)).transpose() - N.transpose() * x;
+        // Minimum-norm change: delta = N (N^T N)^+ residual.
+        const Eigen::SelfAdjointEigenSolver<Matrix> eig(N.transpose() * N);
+        const Vector& lambda = eig.eigenvalues();
+        const double cut = 1e-12 * std::max(lambda.maxCoeff(), 1e-300);
+        Vector y = eig.eigenvectors().transpose() * residual;
+        for (int a = 0; a < m; ++a) y[a] = lambda[a] > cut ? y[a] / lambda[a] : 0.0;
+        const Vector delta = N * (eig.eigenvectors() * y);
+        for (Index p = 0; p < nnz; ++p) value[outer[l] + p] += delta[p];
+        done[static_cast<std::size_t>(l)] = 1;
+    }
+    for (Index l = 0; l < ncols; ++l)
+        if (done[static_cast<std::size_t>(l)])
+            applied[static_cast<std::size_t>(g.fine_dofs[l] / dim)] = 1;
+    return applied;
+}
+
+}  // namespace coarsegrain::mra::detail

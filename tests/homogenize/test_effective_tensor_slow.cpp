@@ -1,0 +1,201 @@
+// Heavier effective-tensor scenes (Kharevych et al. 2009, Sec. 5 and Fig. 4-5): the accordion
+// beam, the cracked bar, laminates against the exact (Backus) laminate tensor, and a layered
+// cube whose layers are parallel to the clamped face.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "coarsegrain/homogenize/homogenize.hpp"
+#include "coarsegrain/material/material.hpp"
+#include "coarsegrain/mesh/grid.hpp"
+#include "homogenize/homogenize_test_util.hpp"
+#include "test_util.hpp"
+
+namespace coarsegrain {
+namespace {
+
+using nlohmann::json;
+using test::box;
+using test::grid;
+using test::iso;
+
+const std::vector<std::string> kMethods = {"effective-tensor", "naive", "voigt", "reuss"};
+
+/// Every method's figures on a scene (printed), by method name.
+std::map<std::string, test::Comparison> compare_methods(const test::Setup& s, const char* title) {
+    const Vector u = scene::solve_static(s.fine, {}).u;
+    std::map<std::string, test::Comparison> out;
+    std::printf("%s\n  %-17s %10s %12s\n", title, "method", "l2_rel", "compliance");
+    for (const std::string& m : kMethods) {
+        out[m] = test::compare(s.fine, u, homogenize::build_coarse_model(s.scene, s.fine, m));
+        std::printf("  %-17s %10.4f %12.4f\n", m.c_str(), out[m].l2_rel, out[m].compliance_ratio);
+    }
+    return out;
+}
+
+// Fig. 5, the accordion: a 4x1x1 beam of layers across its axis (E = 1e5 / 1e2, contrast 1000),
+// clamped at x = 0 and hanging under gravity, on a coarse mesh of 8 x 3 x 3 cells (3 across the
+// thickness). Measured: effective-tensor l2 0.094, compliance 0.969; naive and Voigt l2 0.995,
+// compliance 0.005 (Lamé averaging equals Voigt for isotropic layers in 3D); Reuss l2 0.48.
+TEST(EffectiveTensorSlow, AccordionBeam) {
+    const test::Setup s = test::setup(
+        {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {32, 8, 8}, "hex")},
+         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.25}, {"ids", {1, 2}}}}}},
+         {"materials", {{"1", iso(1e5, 0.3)}, {"2", iso(1e2, 0.45)}}},
+         {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
+         {"loads", {{"gravity", {0, 0, -9.81}}}},
+         {"coarse", {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {8, 3, 3}, "tet")}}}});
+    auto r = compare_methods(s, "accordion beam (contrast 1000, 8x3x3 coarse cells)");
+    EXPECT_LT(3 * r["effective-tensor"].l2_rel, r["naive"].l2_rel);
+    EXPECT_LT(3 * r["effective-tensor"].l2_rel, r["voigt"].l2_rel);
+    EXPECT_NEAR(r["effective-tensor"].compliance_ratio, 1.0, 0.15);
+    EXPECT_LT(r["naive"].compliance_ratio, 0.1);
+}
+
+// Fig. 4, a crack: a 4x1 bar (E = 1e4) cut from below by a thin slice of soft material (E = 1,
+// 1/16 wide, 0.8 deep, between x = 1.97 and 2.03), clamped at x = 0 under gravity, on 3 x 1
+// coarse cells whose nodes are far from the slice. The fine bar bends at the slice; the
+// effective tensors carry it (measured tip deflection 0.87 of the fine one), averages do not
+// (0.05). Reuss overshoots (3.3x): it spreads the soft slice's compliance over the whole cell.
+TEST(EffectiveTensorSlow, CrackedBarBendsOnACoarseMesh) {
+    scene::Scene sc =
+        scene::parse_scene({{"mesh", grid({0, 0}, {4, 1}, {128, 32}, "quad")},
+                            {"materials", {{"1", iso(1e4, 0.3)}, {"2", iso(1.0, 0.3)}}},
+                            {"dirichlet", {box({-1e-9, -1}, {1e-9, 2})}},
+                            {"loads", {{"gravity", {0, -9.81}}}},
+                            {"coarse", {{"mesh", grid({0, 0}, {4, 1}, {3, 1}, "tri")}}}},
+                           "crack.json", "");
+    const Matrix centres = mesh::element_centroids(sc.mesh);
+    for (Index e = 0; e < sc.mesh.num_elements(); ++e)
+        sc.mesh.material_ids[e] =
+            std::abs(centres(e, 0) - 2.0) < 1.0 / 32 && centres(e, 1) < 0.8 ? 2 : 1;
+    const scene::FineModel fine = scene::build_fine_model(sc);
+    const Vector u = scene::solve_static(fine, {}).u;
+    const Index tip = fine.mesh.num_nodes() - 1;  // corner (4, 1)
+    std::printf("cracked bar: tip deflection / fine\n");
+    std::map<std::string, double> ratio;
+    for (const std::string& m : kMethods) {
+        const coarsen::CoarseModel model = homogenize::build_coarse_model(sc, fine, m);
+        const Vector uc = model.to_fine * test::solve_coarse(model);
+        ratio[m] = uc[2 * tip + 1] / u[2 * tip + 1];
+        std::printf("  %-17s %8.3f\n", m.c_str(), ratio[m]);
+    }
+    EXPECT_NEAR(ratio["effective-tensor"], 1.0, 0.3);
+    EXPECT_LT(ratio["naive"], 0.2);
+    EXPECT_LT(ratio["voigt"], 0.2);
+}
+
+/// Exact tensor of a laminate with layers normal to z in equal fractions (Backus averaging in
+/// Mandel form): with I = (xx, yy, xy) and O = (zz, yz, xz), C*_OO = <C_OO^{-1}>^{-1},
+/// C*_OI = C*_OO <C_OO^{-1} C_OI>, C*_II = <C_II - C_IO C_OO^{-1} C_OI> + <C_IO C_OO^{-1}>
+/// C*_OO <C_OO^{-1} C_OI>.
+Matrix laminate_tensor(const Matrix& C1, const Matrix& C2) {
+    const std::array<int, 3> I = {0, 1, 5}, O = {2, 3, 4};
+    auto block = [](const Matrix& C, const std::array<int, 3>& r, const std::array<int, 3>& c) {
+        Matrix B(3, 3);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) B(i, j) = C(r[i], c[j]);
+        return B;
+    };
+    auto mean = [](const Matrix& a, const Matrix& b) { return Matrix(0.5 * (a + b)); };
+    const Matrix S1 = block(C1, O, O).inverse(), S2 = block(C2, O, O).inverse();
+    const Matrix OO = mean(S1, S2).inverse();
+    const Matrix a = mean(S1 * block(C1, O, I), S2 * block(C2, O, I));
+    const Matrix b = mean(block(C1, I, O) * S1, block(C2, I, O) * S2);
+    const Matrix II = mean(block(C1, I, I) - block(C1, I, O) * S1 * block(C1, O, I),
+                           block(C2, I, I) - block(C2, I, O) * S2 * block(C2, O, I)) +
+                      b * OO * a;
+    const Matrix OI = OO * a;
+    Matrix C(6, 6);
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            C(I[i], I[j]) = II(i, j);
+            C(O[i], O[j]) = OO(i, j);
+            C(O[i], I[j]) = C(I[j], O[i]) = OI(i, j);
+        }
+    return C;
+}
+
+// Laminates: layers normal to z on a 3x3x3 box, coarse cells of 1x1x1 spanning 1, 2 or 4 layer
+// periods. For the interior coarse cell, the volume average of its 6 tets' effective tensors has
+// the out-of-plane block (C_zzzz, C_yzyz, C_xzxz and their couplings) of the exact laminate
+// tensor. Measured: 2e-14 to 6e-12 relative (to the out-of-plane block, growing with the
+// contrast like the round-off of the fine solve) for layers whose tensors are proportional
+// (equal Poisson ratios), for every contrast and period count, hence the bound 1e-8; with
+// different Poisson ratios (0.3 / 0.45, printed, not asserted) the same entries deviate by 2e-3
+// to 1e-2. The in-plane entries (6e-3 to 0.2) and the individual tets (0.15 to 1) deviate more.
+TEST(EffectiveTensorSlow, LaminateOutOfPlaneEntriesAreExact) {
+    std::printf("laminate, interior coarse cell: relative deviation from the Backus tensor\n");
+    std::printf("  %8s %6s %6s %12s %12s %12s\n", "contrast", "nu2", "periods", "out-of-plane",
+                "in-plane", "worst tet");
+    for (const double contrast : {10.0, 100.0, 1000.0})
+        for (const double nu2 : {0.3, 0.45})
+            for (const int periods : {1, 2, 4}) {
+                if (nu2 != 0.3 && contrast != 100.0) continue;
+                const test::Setup s = test::setup(
+                    {{"mesh", grid({0, 0, 0}, {3, 3, 3}, {12, 12, 6 * periods}, "tet")},
+                     {"material_field",
+                      {{"layers", {{"axis", "z"}, {"thickness", 0.5 / periods}, {"ids", {1, 2}}}}}},
+                     {"materials", {{"1", iso(contrast, 0.3)}, {"2", iso(1.0, nu2)}}},
+                     {"coarse", {{"mesh", grid({0, 0, 0}, {3, 3, 3}, {3, 3, 3}, "tet")}}}});
+                const homogenize::Coarsening c =
+                    homogenize::coarsening(s.scene, s.fine, "effective-tensor");
+                const Matrix B = laminate_tensor(material::isotropic(3, contrast, 0.3, 1.0).C,
+                                                 material::isotropic(3, 1.0, nu2, 1.0).C);
+                const Index cell = 1 + 3 * (1 + 3 * 1);  // the centre cell of the 3x3x3 grid
+                Matrix avg = Matrix::Zero(6, 6);
+                double worst_tet = 0;
+                for (Index q = 6 * cell; q < 6 * cell + 6; ++q) {
+                    avg += c.coarse_measures[q] * c.C[q];
+                    worst_tet = std::max(worst_tet, (c.C[q] - B).norm() / B.norm());
+                }
+                avg /= c.coarse_measures.segment(6 * cell, 6).sum();
+                const std::array<int, 3> O = {2, 3, 4}, I = {0, 1, 5};
+                double out = 0, in = 0;
+                for (int i : O)
+                    for (int j : O) out = std::max(out, std::abs(avg(i, j) - B(i, j)));
+                for (int i : I)
+                    for (int j : I) in = std::max(in, std::abs(avg(i, j) - B(i, j)));
+                Matrix B_OO(3, 3), B_II(3, 3);
+                for (int i = 0; i < 3; ++i)
+                    for (int j = 0; j < 3; ++j) {
+                        B_OO(i, j) = B(O[i], O[j]);
+                        B_II(i, j) = B(I[i], I[j]);
+                    }
+                out /= B_OO.norm();
+                in /= B_II.norm();
+                std::printf("  %8g %6.2f %6d %12.2e %12.2e %12.2e\n", contrast, nu2, periods, out,
+                            in, worst_tet);
+                if (nu2 == 0.3) {
+                    EXPECT_LT(out, 1e-8)
+                        << "contrast " << contrast << ", " << periods << " periods";
+                }
+            }
+}
+
+// A layered cube with the layers parallel to its clamped face (normal to x, clamped at x = 0,
+// gravity along -z): the limitation the lead documents. Only sanity is asserted (finite figures,
+// positive-definite tensors); the numbers are printed.
+TEST(EffectiveTensorSlow, LayeredCubeParallelToTheClampedFace) {
+    const test::Setup s = test::setup(
+        {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {16, 16, 16}, "hex")},
+         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.125}, {"ids", {1, 2}}}}}},
+         {"materials", {{"1", iso(1e5, 0.3)}, {"2", iso(1e2, 0.45)}}},
+         {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
+         {"loads", {{"gravity", {0, 0, -9.81}}}},
+         {"coarse", {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {3, 3, 3}, "tet")}}}});
+    const auto r = compare_methods(s, "layered cube, layers parallel to the clamped face");
+    for (const auto& [method, cmp] : r) {
+        EXPECT_TRUE(std::isfinite(cmp.l2_rel)) << method;
+        EXPECT_GT(cmp.compliance_ratio, 0.0) << method;
+    }
+    const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
+    for (const Mandel6& C : c.C) {
+        const Eigen::SelfAdjointEigenSolver<Matrix> eig(Matrix(C.topLeftCorner(6, 6)));
+        EXPECT_GT(eig.eigenvalues()[0], 0.0);
+    }
+}
+
+}  // namespace
+}  // namespace coarsegrain
