@@ -6,8 +6,10 @@
 #include <cstdio>
 #include <exception>
 
+#include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/progress.hpp"
+#include "run_coarsen.hpp"
 #include "run_solve.hpp"
 
 namespace cg = coarsegrain;
@@ -32,10 +34,19 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 1024));
 
     std::string scene_file, out_dir = "out/solve", demo_out = "out/demo";
+    std::string coarsen_scene, coarsen_out = "out/coarsen", method = "effective-tensor";
     double demo_scale = 1.0;
     CLI::App* solve = app.add_subcommand("solve", "static solve of a scene on its fine mesh");
     solve->add_option("scene", scene_file, "scene file (JSON)")->required();
     solve->add_option("--out", out_dir, "output folder")->capture_default_str();
+    CLI::App* coarsen = app.add_subcommand(
+        "coarsen", "build a coarse model with one method and compare it with the fine solve");
+    coarsen->add_option("scene", coarsen_scene, "scene file (JSON) with a \"coarse\" block")
+        ->required();
+    coarsen->add_option("--method", method, "coarsening method")
+        ->check(CLI::IsMember(cg::coarsen::method_names()))
+        ->capture_default_str();
+    coarsen->add_option("--out", coarsen_out, "output folder")->capture_default_str();
     CLI::App* demo = app.add_subcommand(
         "demo",
         "the built-in scene: a layered beam (stiff/soft, contrast 1000) hung under gravity");
@@ -62,6 +73,11 @@ int main(int argc, char** argv) {
             const double read =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             cg::app::run_solve(sc, out_dir, "solve", read);
+        } else if (*coarsen) {
+            const cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
+            const double read =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            cg::app::run_coarsen(sc, method, coarsen_out, read);
         } else if (*demo) {
             const cg::scene::Scene sc =
                 cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
