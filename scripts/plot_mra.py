@@ -10,11 +10,7 @@ CSV labelled by its file name; --cond additionally writes cond(A^k) and cond(B^k
 import os
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import numpy as np
 
 REQUIRED = ["level", "error_over_g", "cond_A", "cond_B"]
 
@@ -57,6 +53,12 @@ def main(argv):
         sys.exit(__doc__)
     out, csvs = args[0], args[1:]
     tables = [(os.path.splitext(os.path.basename(p))[0], read_csv(p)) for p in csvs]
+
+    # Imported only once the input is known to be good: a bad CSV fails fast.
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(5, 4))
     for label, t in tables:
