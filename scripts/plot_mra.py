@@ -59,10 +59,14 @@ def main(argv):
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker  # noqa: F401 (used as matplotlib.ticker)
 
     fig, ax = plt.subplots(figsize=(5, 4))
     for label, t in tables:
-        ax.semilogy(t["level"], t["error_over_g"], "o-", label=label)
+        # The finest level's error is 0 by construction: not drawable on a log axis.
+        positive = t["error_over_g"] > 0
+        ax.semilogy(t["level"][positive], t["error_over_g"][positive], "o-", label=label)
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_xlabel("level k")
     ax.set_ylabel(r"$\|u^k - u\|_A / \|g\|_2$")
     ax.set_title("Homogenization error")
@@ -77,6 +81,7 @@ def main(argv):
             ax.semilogy(t["level"], t["cond_A"], "o-", label=f"{label} A")
             finite = np.isfinite(t["cond_B"])
             ax.semilogy(t["level"][finite], t["cond_B"][finite], "s--", label=f"{label} B")
+        ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
         ax.set_xlabel("level k")
         ax.set_ylabel("condition number")
         ax.legend()
