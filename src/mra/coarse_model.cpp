@@ -100,11 +100,18 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
     m.nodes = nodes;
     m.elements = L1.cells.head(dim).prod();
 
-    // Selection of the present coarsest DOFs among all grid DOFs: P (n by #dofs).
+    // Coefficients of level 1 are the measurements C^1 ... C^{q-1} u of a fine displacement u;
+    // a translation t measures s t with s the row sums of that chain (1 for Dirac, 4^(q-1) in
+    // the interior of a 2D grid for the linear refinement). Coarse DOFs u_c = v / s make the
+    // model's DOFs displacements of the coarse nodes (exactly for translations): with v = S u_c,
+    // K = S A^1 S, f = S g^1 and to_fine = Φ^{1,T} S.
+    Vector s = Vector::Ones(h.fine_dofs.size());
+    for (int k = h.num_levels() - 1; k >= 1; --k) s = h.level(k).C * s;
+    // P: present coarsest DOFs -> all grid DOFs, scaled by s.
     SparseMatrix P(n, L1.dofs.size());
     {
         std::vector<Triplet> t;
-        for (Index i = 0; i < L1.dofs.size(); ++i) t.emplace_back(L1.dofs[i], i, 1.0);
+        for (Index i = 0; i < L1.dofs.size(); ++i) t.emplace_back(L1.dofs[i], i, s[i]);
         P.setFromTriplets(t.begin(), t.end());
     }
     m.K = P * L1.A * SparseMatrix(P.transpose());

@@ -22,9 +22,13 @@ namespace coarsegrain::mra {
 /// @throws InvalidScene naming `coarse.<key>` and the source
 Options parse_options(const nlohmann::json& coarse, const std::string& source);
 
-/// The coarsest level of a hierarchy as a coarse model: K = A^1 and f = g^1 = C̃^1...C̃^{q-1} f
-/// over all DOFs of the coarsest grid (DOFs without a basis function, see Level::dropped_dofs,
-/// have empty rows and columns and are fixed at 0 in bc), to_fine = Φ^{1,T}. `report` holds the
+/// The coarsest level of a hierarchy as a coarse model: K = S A^1 S, f = S g^1 with
+/// g^1 = C̃^1...C̃^{q-1} f, to_fine = Φ^{1,T} S, over all DOFs of the coarsest grid. S is
+/// diagonal: the coefficients v of level 1 are measurements C^1...C^{q-1} u (Eq. 9), which for
+/// a translation t are s t with s the row sums of the chain (s = 1 for Dirac, 4^(q-1) at
+/// interior nodes of a 2D grid for the linear refinement); the model's DOFs u_c = v / s are
+/// displacements of the coarse nodes. DOFs without a basis function (see
+/// Level::dropped_dofs) have empty rows and columns and are fixed at 0 in bc. `report` holds the
 /// options and per level: nodes, dofs, wavelets, radius, build_seconds, nnz and density of C̃,
 /// A and B, and storage bytes of Φ and Ψ; `timings` the phases of h.
 coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine);

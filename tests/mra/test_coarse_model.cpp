@@ -1,0 +1,149 @@
+// The mra coarsening method's entry point: scene options and the CoarseModel it returns.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "coarsegrain/fem/dirichlet.hpp"
+#include "coarsegrain/mra/coarse_model.hpp"
+#include "coarsegrain/mra/multilevel_solver.hpp"
+#include "test_util.hpp"
+
+namespace coarsegrain::mra {
+namespace {
+
+using json = nlohmann::json;
+
+/// A 2D 8x8 layered square clamped at y = 1 under gravity.
+json scene_json() {
+    return json::parse(R"({
+      "dimension": 2,
+      "mesh": { "grid": { "min": [0, 0], "max": [1, 1], "cells": [8, 8], "element": "quad" } },
+      "material_field": { "layers": { "axis": "x", "thickness": 0.25, "ids": [1, 2] } },
+      "materials": { "1": { "E": 1000, "nu": 0.3, "density": 1 },
+                     "2": { "E": 10, "nu": 0.45, "density": 2 } },
+      "dirichlet": [ { "box": { "min": [-1, 0.999], "max": [2, 2] } } ],
+      "loads": { "gravity": [0, -1] },
+      "coarse": { "levels": 3, "refinement": "linear", "radius": "inf" }
+    })");
+}
+
+TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
+    for (const char* refinement : {"linear", "dirac"}) {
+        json j = scene_json();
+        j["coarse"]["refinement"] = refinement;
+        const scene::Scene s = scene::parse_scene(j, "test.json", "");
+        const scene::FineModel fine = scene::build_fine_model(s);
+        const coarsen::CoarseModel m = build_coarse_model(s, fine);
+        EXPECT_EQ(m.method, "mra");
+        EXPECT_EQ(m.nodes, 9);  // 2x2 cells
+        EXPECT_EQ(m.elements, 4);
+        ASSERT_EQ(m.K.rows(), 18);
+        ASSERT_EQ(m.to_fine.rows(), fine.mesh.num_dofs());
+        ASSERT_EQ(m.to_fine.cols(), 18);
+        // Dirac: the three top coarse nodes sit on the clamped edge and have no basis function
+        // (constrain = eliminate for Dirac); linear keeps them.
+        EXPECT_EQ(m.bc.dofs.size(), std::string(refinement) == "dirac" ? 6u : 0u);
+        EXPECT_EQ(m.report["levels"].size(), 2u);
+        EXPECT_EQ(m.report["options"]["dirichlet"], "constrain");
+        EXPECT_GT(m.timings["level 1: A"] + m.timings["level 2: A"], 0.0);
+
+        // Solving the model as the runtime does (conditions eliminated) gives the hierarchy's
+        // single-level solve of level 1.
+        const fem::ReducedSystem sys = fem::reduce(m.K, m.f, m.bc);
+        solve::SpdSolver solver;
+        solver.compute(sys.K);
+        const Vector u = m.to_fine * fem::expand(sys, solver.solve(sys.rhs), m.bc, 18);
+        const Hierarchy h = build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, parse_options(j["coarse"], "t"));
+        MultilevelSolver ms(h);
+        const Vector expected = ms.solve_level(fine.f, 1);
+        // Two solves of the same 18-DOF system: round-off, 1e-12.
+        EXPECT_LT((u - expected).norm(), 1e-12 * expected.norm()) << refinement;
+
+        // Coarse DOFs are displacements: a unit x translation of the coarse nodes maps to what
+        // the hierarchy's basis makes of the fine translation's measurements, Φ^{1,T} C...C t.
+        Vector t_fine = Vector::Zero(h.fine_dofs.size());
+        for (Index a = 0; a < t_fine.size(); ++a) t_fine[a] = h.fine_dofs[a] % 2 == 0 ? 1.0 : 0.0;
+        Vector measured = t_fine;
+        for (int k = h.num_levels() - 1; k >= 1; --k) measured = h.level(k).C * measured;
+        Vector t_coarse = Vector::Zero(18);
+        for (Index a = 0; a < h.level(1).dofs.size(); ++a)
+            t_coarse[h.level(1).dofs[a]] = h.level(1).dofs[a] % 2 == 0 ? 1.0 : 0.0;
+        const Vector via_model = m.to_fine * t_coarse;
+        const Vector via_basis = h.level(1).Phi.transpose() * measured;
+        // Division and multiplication by the same power-of-two sums: 1e-14.
+        EXPECT_LT((via_model - via_basis).cwiseAbs().maxCoeff(), 1e-14) << refinement;
+    }
+}
+
+TEST(MraCoarseModel, OptionsDefaultsAndValues) {
+    const Options d = parse_options(json(), "t");
+    EXPECT_EQ(d.levels, 3);
+    EXPECT_EQ(d.refinement, Refinement::Linear);
+    EXPECT_TRUE(std::isinf(d.radius.at(0)));
+    EXPECT_EQ(d.radius_grid, RadiusGrid::Fine);
+    EXPECT_EQ(d.truncation, 0.0);
+    EXPECT_TRUE(d.invariance);
+    EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
+    const Options o = parse_options(
+        json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
+                        "radius_grid": "coarse", "truncation": 1e-7, "invariance": false,
+                        "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
+        "t");
+    EXPECT_EQ(o.levels, 4);
+    EXPECT_EQ(o.refinement, Refinement::Dirac);
+    ASSERT_EQ(o.radius.size(), 3u);
+    EXPECT_EQ(o.radius[0], 2.0);
+    EXPECT_TRUE(std::isinf(o.radius[1]));
+    EXPECT_EQ(o.radius[2], 3.5);
+    EXPECT_EQ(o.radius_grid, RadiusGrid::Coarse);
+    EXPECT_EQ(o.truncation, 1e-7);
+    EXPECT_FALSE(o.invariance);
+    EXPECT_EQ(o.dirichlet, DirichletTreatment::DiagonalPenalty);
+}
+
+TEST(MraCoarseModel, BadOptionsNameTheirKey) {
+    const struct {
+        const char* coarse;
+        const char* message;
+    } cases[] = {
+        {R"({"levels": 1})", "test.json: coarse.levels: expected an integer >= 2"},
+        {R"({"levels": 2.5})", "coarse.levels: expected an integer"},
+        {R"({"refinement": "cubic"})", "coarse.refinement: expected \"dirac\" or \"linear\""},
+        {R"({"radius": 0.5})", "coarse.radius: expected a number >= 1 or \"inf\""},
+        {R"({"radius": "infinite"})", "coarse.radius: expected a number >= 1 or \"inf\""},
+        {R"({"levels": 3, "radius": [2, 3, 4]})", "coarse.radius: expected levels - 1 = 2"},
+        {R"({"radius": [2, "x"]})", "coarse.radius[1]"},
+        {R"({"radius_grid": "medium"})", "coarse.radius_grid"},
+        {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
+        {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},
+        {R"({"dirichlet": "clamp"})", "coarse.dirichlet: expected \"constrain\""},
+        {R"({"levels": 4})", "coarse.levels: 4 levels need cells per axis divisible by 2^3 = 8"},
+    };
+    for (const auto& c : cases) {
+        json j = scene_json();
+        j["coarse"] = json::parse(c.coarse);
+        if (std::string(c.coarse).find("\"levels\": 4") != std::string::npos)
+            j["mesh"]["grid"]["cells"] = {8, 12};
+        test::expect_error(
+            [&] {
+                const scene::Scene s = scene::parse_scene(j, "test.json", "");
+                build_coarse_model(s, scene::build_fine_model(s));
+            },
+            c.message);
+    }
+}
+
+TEST(MraCoarseModel, UnsupportedInputIsReported) {
+    json j = scene_json();
+    j["dirichlet"][0]["value"] = {0.0, 0.1};
+    const scene::Scene s = scene::parse_scene(j, "test.json", "");
+    test::expect_error([&] { build_coarse_model(s, scene::build_fine_model(s)); },
+                       "only zero prescribed displacements");
+    const scene::Scene s2 = scene::parse_scene(scene_json(), "test.json", "");
+    scene::FineModel fine = scene::build_fine_model(s2);
+    fine.mesh.grid.reset();
+    test::expect_error([&] { build_coarse_model(s2, fine); }, "needs a regular grid");
+}
+
+}  // namespace
+}  // namespace coarsegrain::mra
