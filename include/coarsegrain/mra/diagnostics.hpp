@@ -1,0 +1,59 @@
+#pragma once
+/// @file Per-level figures of a material-adapted hierarchy that reproduce Chen et al. 2019,
+/// Sec. 5 as data: homogenization error (Fig. 9, Table 1), extreme eigenvalues and condition
+/// numbers of A^k and B^k (Figs. 7 and 8), sparsity and storage (Table 1), build time.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "coarsegrain/mra/hierarchy.hpp"
+
+namespace coarsegrain::mra {
+
+/// Figures of one level k (1 = coarsest, q = finest). Quantities a level does not have (B^q,
+/// C̃^q, Ψ^q at the finest level) are NaN or 0 bytes.
+struct LevelDiagnostics {
+    int k = 0;
+    Index dofs = 0;      ///< rows of A^k
+    Index wavelets = 0;  ///< rows of B^k (0 at level q)
+    /// Homogenization error of the single-level solve (Sec. 4.1): ||u^k - u||_A / ||g||_2 with
+    /// u^k = Φ^{k,T} (A^k)^{-1} g^k, u the fine solution and A = A^q (the paper's Fig. 9 metric).
+    double error_over_g = 0;
+    double error_over_u = 0;                                ///< ||u^k - u||_A / ||u||_A
+    double lambda_min_A = 0, lambda_max_A = 0, cond_A = 0;  ///< of A^k (Figs. 7, 8)
+    double lambda_min_B = 0, lambda_max_B = 0, cond_B = 0;  ///< of B^k (NaN at level q)
+    /// Fraction of zero entries (1 - stored nonzeros / (rows * cols)); explicitly stored zeros
+    /// count as zeros. sparsity_C is of C̃^k (NaN at level q).
+    double sparsity_A = 0, sparsity_B = 0, sparsity_C = 0;
+    std::size_t bytes_Phi = 0, bytes_Psi = 0, bytes_C = 0, bytes_A = 0, bytes_B = 0;
+    double build_seconds = 0;  ///< Level::build_seconds (0 at level q, which is not built)
+};
+
+struct Diagnostics {
+    std::vector<LevelDiagnostics> levels;  ///< levels[k-1] is level k, k = 1..q
+};
+
+/// Extreme eigenvalues of a symmetric positive-definite sparse matrix.
+struct Spectrum {
+    double lambda_min = 0, lambda_max = 0;
+    double condition() const { return lambda_max / lambda_min; }
+};
+
+/// Largest eigenvalue by Lanczos on A (Spectra), smallest by Lanczos on A^{-1} (shift-invert
+/// with shift 0, one CHOLMOD factorization). Never forms a dense matrix.
+/// @throws Error if A is empty, not positive definite, or Lanczos does not converge
+Spectrum extreme_eigenvalues(const SparseMatrix& A);
+
+/// Fraction of zero entries of M (explicitly stored zeros count as zeros); 0 for an empty M.
+double sparsity(const SparseMatrix& M);
+
+/// All figures of all levels for the load `g_fine` (over all fine grid DOFs, as
+/// MultilevelSolver::solve_level takes it).
+/// @throws Error if g_fine has the wrong size or is zero on the hierarchy's fine DOFs
+Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine);
+
+/// One row per level with a header row (column names as the LevelDiagnostics fields, NaN as
+/// "nan"), written atomically.
+void write_csv(const Diagnostics& d, const std::string& file);
+
+}  // namespace coarsegrain::mra

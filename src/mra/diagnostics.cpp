@@ -1,0 +1,156 @@
+#include "coarsegrain/mra/diagnostics.hpp"
+
+#include <Spectra/MatOp/SparseSymMatProd.h>
+#include <Spectra/SymEigsSolver.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "coarsegrain/common/error.hpp"
+#include "coarsegrain/io/file_util.hpp"
+#include "coarsegrain/mra/multilevel_solver.hpp"
+#include "coarsegrain/solve/spd_solver.hpp"
+
+namespace coarsegrain::mra {
+namespace {
+
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+/// y = A^{-1} x by a kept factorization: the operator of Lanczos for the smallest eigenvalue.
+class InverseOp {
+  public:
+    using Scalar = double;
+    explicit InverseOp(const SparseMatrix& A) { m_solver.compute(A); }
+    Index rows() const { return m_solver.rows(); }
+    Index cols() const { return m_solver.rows(); }
+    void perform_op(const double* x_in, double* y_out) const {
+        const Vector y = m_solver.solve(Vector(Eigen::Map<const Vector>(x_in, rows())));
+        Eigen::Map<Vector>(y_out, rows()) = y;
+    }
+
+  private:
+    solve::SpdSolver m_solver;
+};
+
+/// Largest eigenvalue of the operator by Lanczos. Tolerance 1e-12 relative (Spectra's
+/// convergence test on the Ritz value), well under the 1e-8 the tests ask for.
+template <class Op>
+double largest_eigenvalue(Op& op, const char* what) {
+    const Index n = op.rows();
+    const Index ncv = std::min<Index>(n, 20);
+    Spectra::SymEigsSolver<Op> eigs(op, 1, ncv);
+    eigs.init();
+    eigs.compute(Spectra::SortRule::LargestAlge, 1000, 1e-12);
+    CG_VERIFY(eigs.info() == Spectra::CompInfo::Successful,
+              "mra diagnostics: Lanczos for the {} eigenvalue of a {}x{} matrix did not converge",
+              what, n, n);
+    return eigs.eigenvalues()[0];
+}
+
+double energy_norm(const SparseMatrix& A, const Vector& v) { return std::sqrt(v.dot(A * v)); }
+
+Vector restrict_to(const Vector& v, const IndexVector& dofs) {
+    Vector r(dofs.size());
+    for (Index i = 0; i < dofs.size(); ++i) r[i] = v[dofs[i]];
+    return r;
+}
+
+}  // namespace
+
+Spectrum extreme_eigenvalues(const SparseMatrix& A) {
+    CG_VERIFY(A.rows() > 0 && A.rows() == A.cols(),
+              "mra diagnostics: eigenvalues of a {}x{} matrix", A.rows(), A.cols());
+    if (A.rows() == 1) {
+        const double a = A.coeff(0, 0);
+        CG_VERIFY(a > 0, "mra diagnostics: 1x1 matrix {} is not positive definite", a);
+        return {a, a};
+    }
+    // Both triangles are stored; the product uses the lower one.
+    Spectra::SparseSymMatProd<double, Eigen::Lower, Eigen::ColMajor, Index> prod(A);
+    InverseOp inv(A);
+    Spectrum s;
+    s.lambda_max = largest_eigenvalue(prod, "largest");
+    s.lambda_min = 1.0 / largest_eigenvalue(inv, "smallest");
+    return s;
+}
+
+double sparsity(const SparseMatrix& M) {
+    const double size = static_cast<double>(M.rows()) * static_cast<double>(M.cols());
+    if (size == 0) return 0;
+    Index nonzero = 0;
+    for (Index i = 0; i < M.nonZeros(); ++i)
+        if (M.valuePtr()[i] != 0) ++nonzero;
+    return 1.0 - static_cast<double>(nonzero) / size;
+}
+
+Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine) {
+    CG_VERIFY(g_fine.size() == h.fine_grid_dofs(),
+              "mra diagnostics: load has {} entries, the fine grid {} DOFs", g_fine.size(),
+              h.fine_grid_dofs());
+    const int q = h.num_levels();
+    const double g_norm = restrict_to(g_fine, h.fine_dofs).norm();
+    CG_VERIFY(g_norm > 0, "mra diagnostics: the load is zero on the hierarchy's DOFs");
+    MultilevelSolver solver(h);
+    const Vector u = restrict_to(solver.solve_level(g_fine, q), h.fine_dofs);
+    const double u_norm = energy_norm(h.A_fine, u);
+    Diagnostics d;
+    d.levels.resize(static_cast<std::size_t>(q));
+    for (int k = 1; k <= q; ++k) {
+        LevelDiagnostics& L = d.levels[static_cast<std::size_t>(k - 1)];
+        L.k = k;
+        const SparseMatrix& A = k == q ? h.A_fine : h.level(k).A;
+        L.dofs = A.rows();
+        const Vector e = restrict_to(solver.solve_level(g_fine, k), h.fine_dofs) - u;
+        L.error_over_g = energy_norm(h.A_fine, e) / g_norm;
+        L.error_over_u = energy_norm(h.A_fine, e) / u_norm;
+        const Spectrum sa = extreme_eigenvalues(A);
+        L.lambda_min_A = sa.lambda_min;
+        L.lambda_max_A = sa.lambda_max;
+        L.cond_A = sa.condition();
+        L.sparsity_A = sparsity(A);
+        L.bytes_A = storage_bytes(A);
+        if (k == q) {
+            L.lambda_min_B = L.lambda_max_B = L.cond_B = nan;
+            L.sparsity_B = L.sparsity_C = nan;
+            continue;
+        }
+        const Level& lev = h.level(k);
+        L.wavelets = lev.B.rows();
+        if (L.wavelets > 0) {
+            const Spectrum sb = extreme_eigenvalues(lev.B);
+            L.lambda_min_B = sb.lambda_min;
+            L.lambda_max_B = sb.lambda_max;
+            L.cond_B = sb.condition();
+        } else {
+            L.lambda_min_B = L.lambda_max_B = L.cond_B = nan;
+        }
+        L.sparsity_B = sparsity(lev.B);
+        L.sparsity_C = sparsity(lev.C_adapted);
+        L.bytes_Phi = storage_bytes(lev.Phi);
+        L.bytes_Psi = storage_bytes(lev.Psi);
+        L.bytes_C = storage_bytes(lev.C_adapted);
+        L.bytes_B = storage_bytes(lev.B);
+        L.build_seconds = lev.build_seconds;
+    }
+    return d;
+}
+
+void write_csv(const Diagnostics& d, const std::string& file) {
+    io::write_atomically(file, [&](std::ostream& os) {
+        os << "level,dofs,wavelets,error_over_g,error_over_u,lambda_min_A,lambda_max_A,cond_A,"
+              "lambda_min_B,lambda_max_B,cond_B,sparsity_A,sparsity_B,sparsity_C,bytes_Phi,"
+              "bytes_Psi,bytes_C,bytes_A,bytes_B,build_seconds\n";
+        for (const LevelDiagnostics& L : d.levels)
+            os << fmt::format(
+                "{},{},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
+                "{:.17g},{:.17g},{},{},{},{},{},{:.17g}\n",
+                L.k, L.dofs, L.wavelets, L.error_over_g, L.error_over_u, L.lambda_min_A,
+                L.lambda_max_A, L.cond_A, L.lambda_min_B, L.lambda_max_B, L.cond_B, L.sparsity_A,
+                L.sparsity_B, L.sparsity_C, L.bytes_Phi, L.bytes_Psi, L.bytes_C, L.bytes_A,
+                L.bytes_B, L.build_seconds);
+    });
+}
+
+}  // namespace coarsegrain::mra

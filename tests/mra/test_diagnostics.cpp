@@ -1,0 +1,198 @@
+// Per-level diagnostics of the hierarchy: eigenvalues against a dense solver, error, sparsity,
+// storage, CSV round trip and the plotting script.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "coarsegrain/mra/diagnostics.hpp"
+#include "mra_test_util.hpp"
+#include "test_util.hpp"
+
+namespace coarsegrain::mra {
+namespace {
+
+/// Horizontal layers, 8 over the height, alternating soft (0) and stiff (1).
+int layered(const Eigen::VectorXd& x) { return static_cast<int>(std::floor(8 * x[1])) % 2; }
+
+double dense_zero_fraction(const SparseMatrix& M) {
+    const Matrix D(M);
+    return static_cast<double>((D.array() == 0).count()) / static_cast<double>(D.size());
+}
+
+void expect_spectrum(const SparseMatrix& M, double lmin, double lmax, double cond,
+                     const std::string& what) {
+    const Eigen::SelfAdjointEigenSolver<Matrix> eig{Matrix(M)};
+    const double dmin = eig.eigenvalues().minCoeff(), dmax = eig.eigenvalues().maxCoeff();
+    // Lanczos converged to 1e-12 relative; the dense solver is backward stable (error
+    // ~ n eps lambda_max on each eigenvalue, here with cond <= 1e7 at most ~1e-8 relative on
+    // lambda_min for the worst level). 1e-8 relative as the task asks.
+    EXPECT_NEAR(lmax, dmax, 1e-8 * dmax) << what;
+    EXPECT_NEAR(lmin, dmin, 1e-8 * dmin) << what;
+    EXPECT_NEAR(cond, dmax / dmin, 1e-8 * dmax / dmin) << what;
+}
+
+TEST(MraDiagnostics, SpectraAgreesWithDenseEigenvalues) {
+    const test::GridProblem p =
+        test::hung_problem(2, Eigen::Vector3i(8, 8, 1), 1.0, 1e3, test::checker_pattern);
+    for (const Refinement r : {Refinement::Linear, Refinement::Dirac}) {
+        const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, test::exact_options(3, r));
+        const Diagnostics d = diagnose(h, p.f);
+        ASSERT_EQ(d.levels.size(), 3u);
+        for (const LevelDiagnostics& L : d.levels) {
+            const std::string what = fmt::format("{} level {}", refinement_name(r), L.k);
+            const bool fine = L.k == h.num_levels();
+            expect_spectrum(fine ? h.A_fine : h.level(L.k).A, L.lambda_min_A, L.lambda_max_A,
+                            L.cond_A, what + " A");
+            if (!fine)
+                expect_spectrum(h.level(L.k).B, L.lambda_min_B, L.lambda_max_B, L.cond_B,
+                                what + " B");
+        }
+    }
+}
+
+TEST(MraDiagnostics, ErrorSparsityAndStorage) {
+    const test::GridProblem p =
+        test::hung_problem(2, Eigen::Vector3i(8, 8, 1), 1.0, 1e3, test::checker_pattern);
+    Options o;
+    o.levels = 3;
+    o.radius = {1};
+    o.truncation = 1e-3;
+    const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+    const Diagnostics d = diagnose(h, p.f);
+    const LevelDiagnostics& fine = d.levels.back();
+    // The finest single-level solve is the very fine solve: bitwise the same vector.
+    EXPECT_EQ(fine.error_over_g, 0.0);
+    EXPECT_EQ(fine.error_over_u, 0.0);
+    EXPECT_TRUE(std::isnan(fine.cond_B));
+    EXPECT_EQ(fine.bytes_Phi, 0u);
+    EXPECT_DOUBLE_EQ(fine.sparsity_A, dense_zero_fraction(h.A_fine));
+    for (int k = 1; k < h.num_levels(); ++k) {
+        const Level& lev = h.level(k);
+        const LevelDiagnostics& L = d.levels[static_cast<std::size_t>(k - 1)];
+        // The coarse spaces are strict subspaces: a positive error.
+        EXPECT_GT(L.error_over_g, 0.0);
+        // Counts are integers divided by the same size: equal to round-off.
+        EXPECT_DOUBLE_EQ(L.sparsity_A, dense_zero_fraction(lev.A));
+        EXPECT_DOUBLE_EQ(L.sparsity_B, dense_zero_fraction(lev.B));
+        EXPECT_DOUBLE_EQ(L.sparsity_C, dense_zero_fraction(lev.C_adapted));
+        // Compressed column storage: a double and an int index per stored entry, cols+1
+        // column pointers.
+        const auto bytes = [](const SparseMatrix& M) {
+            return static_cast<std::size_t>(M.nonZeros()) * 12 +
+                   static_cast<std::size_t>(M.cols() + 1) * 4;
+        };
+        EXPECT_EQ(L.bytes_A, bytes(lev.A));
+        EXPECT_EQ(L.bytes_B, bytes(lev.B));
+        EXPECT_EQ(L.bytes_C, bytes(lev.C_adapted));
+        EXPECT_EQ(L.bytes_Phi, bytes(lev.Phi));
+        EXPECT_EQ(L.bytes_Psi, bytes(lev.Psi));
+        EXPECT_EQ(L.dofs, lev.A.rows());
+        EXPECT_EQ(L.wavelets, lev.B.rows());
+        EXPECT_EQ(L.build_seconds, lev.build_seconds);
+    }
+    test::expect_error([&] { diagnose(h, Vector::Zero(3)); }, "load has 3 entries");
+}
+
+/// Writes the CSV of each refinement of `p` (exact hierarchy, `levels` levels) into `dir`,
+/// checks that it parses back and that the error of nested Galerkin spaces never grows with k,
+/// and returns the file names separated by spaces. Prints the figures if `print`.
+std::string check_csvs(const test::GridProblem& p, int levels, const std::string& dir, bool print) {
+    std::string csvs;
+    for (const Refinement r : {Refinement::Linear, Refinement::Dirac}) {
+        const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, test::exact_options(levels, r));
+        const Diagnostics d = diagnose(h, p.f);
+        const std::string file = dir + "/" + refinement_name(r) + ".csv";
+        write_csv(d, file);
+        csvs += " " + file;
+        for (std::size_t i = 0; i < d.levels.size(); ++i) {
+            const LevelDiagnostics& L = d.levels[i];
+            if (print)
+                std::printf(
+                    "%s k=%d dofs=%d wavelets=%d err/g=%.4e err/u=%.4e condA=%.4e "
+                    "condB=%.4e spA=%.4f spB=%.4f spC=%.4f Phi=%zu Psi=%zu C=%zu A=%zu "
+                    "B=%zu t=%.3f\n",
+                    refinement_name(r).c_str(), L.k, L.dofs, L.wavelets, L.error_over_g,
+                    L.error_over_u, L.cond_A, L.cond_B, L.sparsity_A, L.sparsity_B, L.sparsity_C,
+                    L.bytes_Phi, L.bytes_Psi, L.bytes_C, L.bytes_A, L.bytes_B, L.build_seconds);
+            // span Φ^k is contained in span Φ^{k+1} (Φ^k = C̃^k Φ^{k+1}), and u^k is the
+            // A-projection of u: the error cannot grow with k. 1e-10 relative allows the
+            // round-off of the solves.
+            if (i > 0) {
+                EXPECT_LE(L.error_over_u, d.levels[i - 1].error_over_u * (1 + 1e-10) + 1e-12)
+                    << refinement_name(r) << " level " << L.k;
+            }
+        }
+        // Parse back: header plus one row per level, level numbers 1..q in order.
+        std::ifstream in(file);
+        std::string line;
+        EXPECT_TRUE(std::getline(in, line));
+        EXPECT_EQ(line.rfind("level,dofs,wavelets,error_over_g,", 0), 0u);
+        int rows = 0;
+        while (std::getline(in, line)) {
+            std::istringstream fields(line);
+            std::string cell;
+            int columns = 0, level = 0;
+            double error = 0;
+            while (std::getline(fields, cell, ',')) {
+                if (columns == 0) level = std::stoi(cell);
+                if (columns == 3) error = std::stod(cell);
+                ++columns;
+            }
+            EXPECT_EQ(columns, 20);
+            ++rows;
+            EXPECT_EQ(level, rows);
+            if (rows <= static_cast<int>(d.levels.size())) {
+                // Written with 17 significant digits: reads back exactly.
+                EXPECT_EQ(error, d.levels[static_cast<std::size_t>(rows - 1)].error_over_g);
+            }
+        }
+        EXPECT_EQ(rows, h.num_levels());
+    }
+    return csvs;
+}
+
+/// The CSVs of linear and Dirac hierarchies of one scene parse back; the script plots them and
+/// rejects a bad CSV with a clear message.
+TEST(MraDiagnostics, CsvParsesBackAndPlots) {
+    const test::GridProblem p =
+        test::hung_problem(2, Eigen::Vector3i(8, 8, 1), 100.0, 5e6, layered);
+    const std::string dir = test::temp_dir("mra_diagnostics_plot");
+    const std::string csvs = check_csvs(p, 3, dir, false);
+    const std::string script = COARSEGRAIN_TEST_DATA "/../../scripts/plot_mra.py";
+    std::string out;
+    ASSERT_EQ(test::run("/usr/bin/python3 " + script + " " + dir + "/error.png" + csvs +
+                            " --cond " + dir + "/cond.png",
+                        &out),
+              0)
+        << out;
+    for (const char* png : {"/error.png", "/cond.png"}) {
+        std::ifstream f(dir + png, std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(f)),
+                                std::istreambuf_iterator<char>());
+        EXPECT_GT(bytes.size(), 1000u) << png;
+        EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << png;
+    }
+    {
+        std::ofstream bad(dir + "/bad.csv");
+        bad << "level,dofs\n1,2\n";
+    }
+    EXPECT_NE(
+        test::run("/usr/bin/python3 " + script + " " + dir + "/x.png " + dir + "/bad.csv", &out),
+        0);
+    EXPECT_NE(out.find("missing column(s) error_over_g"), std::string::npos) << out;
+}
+
+/// The 32x32 layered square (E 100 vs 5e6), 5 levels, linear and Dirac refinement (the figures
+/// quoted in the report); writes the CSVs and plots into the test's temporary folder.
+TEST(MraDiagnosticsSlow, Layered32) {
+    const test::GridProblem p =
+        test::hung_problem(2, Eigen::Vector3i(32, 32, 1), 100.0, 5e6, layered);
+    const std::string dir = test::temp_dir("mra_diagnostics_layered32");
+    check_csvs(p, 5, dir, true);
+}
+
+}  // namespace
+}  // namespace coarsegrain::mra
