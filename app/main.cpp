@@ -47,6 +47,16 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember(cg::coarsen::method_names()))
         ->capture_default_str();
     coarsen->add_option("--out", coarsen_out, "output folder")->capture_default_str();
+    coarsen->footer(
+        "Methods: effective-tensor (Kharevych et al. 2009: one anisotropic tensor per element of\n"
+        "coarse.mesh); naive, voigt, reuss (averages of the Lame parameters, tensors, compliances\n"
+        "over the same coarse mesh); mra (Chen et al. 2019).\n"
+        "effective-tensor reads coarse.mesh, coarse.normals (coarse|fine), coarse.boundary\n"
+        "(neumann|mixed) and coarse.map (barycentric|harmonic); the averages read coarse.mesh.\n"
+        "Files: summary.json, solution_fine.vtu, solution_coarse.vtu; with a coarse.mesh method\n"
+        "also coarse_model.vtu (the coarse mesh with its tensors: a scene mesh that `coarsegrain\n"
+        "solve` simulates without the fine mesh) and, for effective-tensor, harmonic.vtu.\n"
+        "See docs/guide.md, \"Coarsening\".");
     CLI::App* demo = app.add_subcommand(
         "demo",
         "the built-in scene: a layered beam (stiff/soft, contrast 1000) hung under gravity");

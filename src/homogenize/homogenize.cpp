@@ -44,6 +44,23 @@ std::string box_string(const mesh::Mesh& m) {
                        fmt::join(b.row(1), ", "));
 }
 
+/// Bounding-box diagonal of a mesh.
+double box_diagonal(const mesh::Mesh& m) {
+    const Matrix b = mesh::bounding_box(m);
+    return (b.row(1) - b.row(0)).norm();
+}
+
+/// Scale sanity: a coarse mesh may stick out of the fine one by at most half a coarse edge
+/// (verify_node_distances), so its bounding box cannot be 10 times larger (or smaller, then it
+/// misses most of the object) unless the two meshes are in different units.
+void verify_scale(const Coarsening& c, const std::string& source) {
+    const double ratio = box_diagonal(c.coarse) / box_diagonal(c.fine);
+    CG_VERIFY(ratio < 10 && ratio > 0.1,
+              "{}: coarse.mesh is {:.3g} times the size of the fine mesh (bounding-box diagonals; "
+              "fine bounding box {}, coarse bounding box {}); are both meshes in the same units?",
+              source, ratio, box_string(c.fine), box_string(c.coarse));
+}
+
 /// Overlap sanity: the coarse mesh must meet the fine mesh, cover all of it, and hold fine
 /// material in every element.
 void verify_overlaps(const Coarsening& c, const std::string& source) {
@@ -212,6 +229,7 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
     Vector outside;
     {
         const Phase phase("intersect", &c.timings);
+        verify_scale(c, scene.source);
         fine_locator.emplace(c.fine);
         c.overlaps = mesh::intersect(c.fine, c.coarse);
         verify_overlaps(c, scene.source);

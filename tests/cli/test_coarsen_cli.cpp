@@ -3,14 +3,18 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "cli/cli_test_util.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
+#include "coarsegrain/io/mesh_io.hpp"
 #include "coarsegrain/io/vtu.hpp"
+#include "coarsegrain/mesh/grid.hpp"
 
 using namespace coarsegrain;
 using namespace coarsegrain::test;
 using ::testing::HasSubstr;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -82,5 +86,145 @@ TEST(CliCoarsen, UnknownCoarseKeyIsNamed) {
     EXPECT_THAT(r.output, HasSubstr("coarse.radious"));
     EXPECT_FALSE(std::filesystem::exists(dir + "/out/summary.json"));
 }
+
+/// Names of a VTU file's point or cell fields.
+std::vector<std::string> field_names(const std::vector<io::Field>& fields) {
+    std::vector<std::string> names;
+    for (const io::Field& f : fields) names.push_back(f.name);
+    return names;
+}
+
+// The effective-tensor method's own figures and files: the build phases the issue asks to time
+// separately (harmonic solves, intersections, tensor assembly), the coarse model with all 21
+// Voigt entries, density and the directional Young's moduli per coarse element, and the fine
+// mesh with the six harmonic displacements.
+TEST(CliCoarsen, EffectiveTensorWritesItsPhasesAndFiles) {
+    const std::string dir = temp_dir("cli_coarsen_et_files");
+    const json s = run_method("effective-tensor", dir);
+    for (const char* phase :
+         {"intersect", "harmonic", "tensors", "assemble", "maps", "build", "factorize", "solve"})
+        EXPECT_GE(s["coarse"]["timings"][phase].get<double>(), 0.0) << phase;
+    for (const char* phase : {"assemble", "factorize", "solve"})
+        EXPECT_GE(s["fine"]["timings"][phase].get<double>(), 0.0) << phase;
+    for (const char* key : {"normals", "boundary", "map", "mollifier_condition", "overlaps"})
+        EXPECT_TRUE(s["coarse"].contains(key)) << key;
+    EXPECT_EQ(s["coarse"]["normals"], "coarse");  // the paper's recommendation is the default
+    EXPECT_EQ(s["coarse"]["boundary"], "neumann");
+    EXPECT_EQ(s["coarse"]["map"], "barycentric");
+    EXPECT_GT(s["speedup"]["solve"].get<double>(), 0.0);
+
+    const auto [coarse, cells] = io::read_vtu(dir + "/out/coarse_model.vtu");
+    EXPECT_EQ(coarse.num_elements(), s["coarse"]["elements"].get<int>());
+    const std::vector<std::string> names = field_names(cells.cell_data);
+    auto has = [&](const std::string& name) {
+        return std::find(names.begin(), names.end(), name) != names.end();
+    };
+    int tensor_entries = 0;
+    for (int I = 1; I <= 6; ++I)
+        for (int J = I; J <= 6; ++J) tensor_entries += has(fmt::format("C_voigt_{}{}", I, J));
+    EXPECT_EQ(tensor_entries, 21);
+    for (const char* name : {"density", "E_x", "E_y", "E_z", "G_condition"})
+        EXPECT_TRUE(has(name)) << name;
+
+    const auto [fine, harmonic] = io::read_vtu(dir + "/out/harmonic.vtu");
+    EXPECT_EQ(fine.num_nodes() * 3, s["fine"]["dofs"].get<int>());
+    EXPECT_EQ(field_names(harmonic.point_data),
+              (std::vector<std::string>{"h_xx", "h_yy", "h_zz", "h_yz", "h_xz", "h_xy"}));
+}
+
+// The coarse model file is a mesh with one tensor and density per element: `coarsegrain solve`
+// on a scene whose mesh is coarse_model.vtu (same boxes and loads, no fine mesh) reproduces the
+// coarse solve of `coarsen`. The probes lie on fine nodes, where the barycentric embedding is
+// the coarse interpolant itself, so they agree too.
+TEST(CliCoarsen, CoarseModelFileIsSolvedWithoutTheFineMesh) {
+    const std::string dir = temp_dir("cli_coarsen_reload");
+    const json c = run_method("effective-tensor", dir);
+    json j = small_scene();
+    j.erase("material_field");
+    j.erase("materials");
+    j["mesh"] = {{"file", dir + "/out/coarse_model.vtu"}};
+    const Result r =
+        cli("solve " + write_scene(dir, j, "coarse_scene.json") + " --out " + dir + "/solve");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const json s = read_json(dir + "/solve/summary.json");
+    EXPECT_EQ(s["fine"]["elements"], c["coarse"]["elements"]);
+    // 1e-10: the same K and f up to the Voigt round trip of the tensors (round-off) and the
+    // same direct solve.
+    const double compliance = c["compliance"].get<double>();
+    EXPECT_NEAR(s["compliance"].get<double>(), compliance, 1e-10 * std::abs(compliance));
+    for (std::size_t p = 0; p < 2; ++p)
+        for (std::size_t k = 0; k < 3; ++k) {
+            const double u = c["probes"][p]["u"][k].get<double>();
+            EXPECT_NEAR(s["probes"][p]["u"][k].get<double>(), u,
+                        1e-10 * c["max_displacement"].get<double>())
+                << "probe " << p << " component " << k;
+        }
+}
+
+struct BadCoarseMesh {
+    std::string name;
+    std::function<json(const std::string& dir)> mesh;  ///< coarse.mesh, given a scratch folder
+    std::string where;                                 ///< the key or file the message names
+    std::string message;
+};
+
+class CliCoarsenBadMesh : public ::testing::TestWithParam<BadCoarseMesh> {};
+
+// A coarse mesh the effective-tensor method cannot use stops the command with exit code 1 and
+// one message naming coarse.mesh (or the coarse mesh file), before any file is written.
+TEST_P(CliCoarsenBadMesh, FailsWithAClearMessageAndNoOutput) {
+    const BadCoarseMesh& bad = GetParam();
+    const std::string dir = temp_dir("cli_coarsen_bad_" + bad.name);
+    json j = coarse_scene();
+    j["coarse"]["mesh"] = bad.mesh(dir);
+    const Result r = cli("coarsen " + write_scene(dir, j) + " --out " + dir + "/out");
+    EXPECT_EQ(r.code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("error: "));
+    EXPECT_THAT(r.output, HasSubstr(bad.where));
+    EXPECT_THAT(r.output, HasSubstr(bad.message));
+    EXPECT_TRUE(!fs::exists(dir + "/out") || fs::is_empty(dir + "/out")) << "files left behind";
+}
+
+json grid_json(const std::vector<double>& min, const std::vector<double>& max) {
+    return {{"grid", {{"min", min}, {"max", max}, {"cells", {2, 1, 1}}, {"element", "tet"}}}};
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, CliCoarsenBadMesh,
+    ::testing::Values(
+        // Covers x in [0, 1] of the bar [0, 2] x [0, 1] x [0, 1].
+        BadCoarseMesh{"half_the_object",
+                      [](const std::string&) {
+                          return grid_json({0, 0, 0}, {1, 1, 1});
+                      },
+                      "coarse.mesh", "misses part of the object"},
+        // The 12 tets of the covering grid plus a flat tet on four corners of the face z = 0.
+        BadCoarseMesh{"degenerate_element",
+                      [](const std::string& dir) {
+                          mesh::Mesh m =
+                              mesh::make_grid(mesh::ElementType::Tet4, Eigen::Vector3d(0, 0, 0),
+                                              Eigen::Vector3d(2, 1, 1), Eigen::Vector3i(2, 1, 1));
+                          const Index n = m.num_elements();
+                          m.elements.conservativeResize(n + 1, 4);
+                          m.elements.row(n) << 0, 1, 3, 4;  // (0,0,0) (1,0,0) (0,1,0) (1,1,0)
+                          m.material_ids.conservativeResize(n + 1);
+                          m.material_ids[n] = 0;
+                          io::write_mesh(dir + "/coarse.vtu", m);
+                          return json{{"file", dir + "/coarse.vtu"}};
+                      },
+                      "coarse.vtu", "element 12 is degenerate"},
+        // The bar's coarse mesh in millimetres: 1000 times its size.
+        BadCoarseMesh{"millimetres",
+                      [](const std::string&) {
+                          return grid_json({0, 0, 0}, {2000, 1000, 1000});
+                      },
+                      "coarse.mesh", "same units"},
+        // The right size, moved away (another origin): it does not meet the object at all.
+        BadCoarseMesh{"far_away",
+                      [](const std::string&) {
+                          return grid_json({100, 0, 0}, {102, 1, 1});
+                      },
+                      "coarse.mesh", "does not overlap the fine mesh at all"}),
+    [](const auto& p) { return p.param.name; });
 
 }  // namespace

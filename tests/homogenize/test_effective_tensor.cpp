@@ -290,6 +290,22 @@ TEST(EffectiveTensor, CoarseModelFileSimulatesWithoutTheFineMesh) {
         "carries one elasticity tensor per element");
 }
 
+// In 2D the coarse model file carries the 6 Voigt entries of a 3x3 tensor, the density and the
+// directional Young's moduli along x and y (no z), and harmonic.vtu the 3 harmonic fields.
+TEST(EffectiveTensor, CoarseModelFieldsIn2D) {
+    const test::Setup s = test::setup(spheres_scene(2));
+    const coarsen::CoarseModel m =
+        homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor");
+    ASSERT_EQ(m.outputs.size(), 2u);
+    std::vector<std::string> cells, points;
+    for (const io::Field& f : m.outputs[0].fields.cell_data) cells.push_back(f.name);
+    for (const io::Field& f : m.outputs[1].fields.point_data) points.push_back(f.name);
+    EXPECT_EQ(cells, (std::vector<std::string>{"C_voigt_11", "C_voigt_12", "C_voigt_13",
+                                               "C_voigt_22", "C_voigt_23", "C_voigt_33", "density",
+                                               "E_x", "E_y", "G_condition"}));
+    EXPECT_EQ(points, (std::vector<std::string>{"h_xx", "h_yy", "h_xy"}));
+}
+
 // Mixed boundary (Sec. 3.8): the harmonic displacements vanish on the clamped nodes. The P1
 // interpolant of fields that vanish at two or more nodes of a coarse element has no strain along
 // their edge (or face), so exactly the coarse elements with >= 2 clamped nodes have a singular
