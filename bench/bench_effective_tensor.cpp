@@ -4,8 +4,13 @@
 // (5 x 5 x 4 cells). Prints the build phases (harmonic solves, intersections, tensor assembly)
 // with a finer breakdown of the harmonic and tensor phases, and the fine CHOLMOD factorize +
 // solve time against the coarse one for the same static scene (best of several runs each).
+// Beside wall-clock seconds it prints the process CPU seconds (all threads) of the build and of
+// its dominant phase: on a shared, loaded machine the wall time grows with the load while the
+// CPU time does not, and CHOLMOD runs its BLAS on one thread (solve::SpdSolver), so on an idle
+// machine the wall time of that phase is about its CPU time.
 // A plain main (not Google Benchmark): each figure is one end-to-end measurement.
 #include <omp.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -28,6 +33,22 @@ double seconds_of(const std::function<void()>& f) {
     const auto start = std::chrono::steady_clock::now();
     f();
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// User + system CPU seconds of the process so far (all threads).
+double cpu_seconds() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+           1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+/// Wall seconds of f; its CPU seconds in *cpu.
+double seconds_of(const std::function<void()>& f, double* cpu) {
+    const double start = cpu_seconds();
+    const double wall = seconds_of(f);
+    *cpu = cpu_seconds() - start;
+    return wall;
 }
 
 /// Best wall time of `runs` calls.
@@ -81,10 +102,13 @@ int main() {
                 fine.mesh.num_dofs(), t_fine_assemble);
 
     cg::coarsen::CoarseModel model;
+    double cpu_build = 0;
     const double t_build = seconds_of(
-        [&] { model = cg::homogenize::build_coarse_model(sc, fine, "effective-tensor"); });
+        [&] { model = cg::homogenize::build_coarse_model(sc, fine, "effective-tensor"); },
+        &cpu_build);
     std::printf("coarse: %d tets, %d DOFs\n", model.elements, static_cast<int>(model.K.rows()));
-    std::printf("effective-tensor build %.2f s:\n", t_build);
+    std::printf("effective-tensor build %.2f s wall, %.2f s CPU (%d OpenMP threads):\n", t_build,
+                cpu_build, omp_get_max_threads());
     for (const auto& [phase, s] : model.timings.entries())
         std::printf("  %-10s %7.3f s\n", phase.c_str(), s);
 
@@ -95,10 +119,14 @@ int main() {
     std::printf("  coarse normals       %7.3f s\n", seconds_of([&] {
                     N = cg::homogenize::coarse_boundary_normals(c.fine, fine.boundary, c.coarse);
                 }));
-    std::printf("  harmonic solve (x6)  %7.3f s  (one CHOLMOD factorization, 6 right-hand sides)\n",
-                seconds_of([&] {
-                    h = cg::homogenize::harmonic_displacements(c.fine, fine.boundary, fine.K, N);
-                }));
+    double cpu_harmonic = 0;
+    const double t_harmonic = seconds_of(
+        [&] { h = cg::homogenize::harmonic_displacements(c.fine, fine.boundary, fine.K, N); },
+        &cpu_harmonic);
+    std::printf(
+        "  harmonic solve (x6)  %7.3f s  (%.3f s CPU; one CHOLMOD factorization, 6 "
+        "right-hand sides)\n",
+        t_harmonic, cpu_harmonic);
     std::vector<cg::Mandel6> G;
     std::printf("  fine mollifiers      %7.3f s\n",
                 seconds_of([&] { G = cg::homogenize::mollifiers(c.fine, h); }));
@@ -115,6 +143,8 @@ int main() {
                 seconds_of([&] { cg::mesh::intersect(c.fine, c.coarse); }), c.overlaps.size());
 
     cg::Vector u_fine, u_coarse;
+    double cpu_fine = 0;
+    seconds_of([&] { u_fine = factorize_and_solve(fine.K, fine.f, fine.bc); }, &cpu_fine);
     const double t_fine =
         best_of(3, [&] { u_fine = factorize_and_solve(fine.K, fine.f, fine.bc); });
     const double t_coarse =
@@ -128,8 +158,10 @@ int main() {
     omp_set_num_threads(threads);
     const cg::Vector u_mapped = model.to_fine * u_coarse;
     std::printf("static solve (reduce + CHOLMOD factorize + solve), best of runs:\n");
-    std::printf("  fine   %9.4f s\n  coarse %9.6f s  (%9.6f s on one OpenMP thread)\n", t_fine,
-                t_coarse, t_coarse_1);
+    std::printf(
+        "  fine   %9.4f s  (%.3f s CPU, first run)\n  coarse %9.6f s  (%9.6f s on one OpenMP "
+        "thread)\n",
+        t_fine, cpu_fine, t_coarse, t_coarse_1);
     std::printf("  ratio  %9.0fx  (%.0fx)\n", t_fine / t_coarse, t_fine / t_coarse_1);
     std::printf("coarse vs fine: l2_rel %.4f, compliance ratio %.4f\n",
                 (u_mapped - u_fine).norm() / u_fine.norm(),
