@@ -1,10 +1,12 @@
 // Heavier effective-tensor scenes (Kharevych et al. 2009, Sec. 5 and Fig. 4-5): the accordion
 // beam, the cracked bar, laminates against the exact (Backus) laminate tensor, and a layered
-// cube whose layers are parallel to the clamped face.
+// cube whose layers are parallel to the clamped face (where the method can lose to Reuss).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "coarsegrain/homogenize/homogenize.hpp"
 #include "coarsegrain/material/material.hpp"
@@ -174,26 +176,56 @@ TEST(EffectiveTensorSlow, LaminateOutOfPlaneEntriesAreExact) {
             }
 }
 
-// A layered cube with the layers parallel to its clamped face (normal to x, clamped at x = 0,
-// gravity along -z): the limitation the lead documents. Only sanity is asserted (finite figures,
-// positive-definite tensors); the numbers are printed.
+/// The layered unit cube: layers normal to x (E = 1e5 / 1e2, nu = 0.3 / 0.45) of the given
+/// thickness, 16^3 hexes, clamped at x = 0 (parallel to the layers) under gravity along -z, on
+/// n^3 coarse cells of 6 tets.
+test::Setup layered_cube(double thickness, int n) {
+    return test::setup({{"mesh", grid({0, 0, 0}, {1, 1, 1}, {16, 16, 16}, "hex")},
+                        {"material_field",
+                         {{"layers", {{"axis", "x"}, {"thickness", thickness}, {"ids", {1, 2}}}}}},
+                        {"materials", {{"1", iso(1e5, 0.3)}, {"2", iso(1e2, 0.45)}}},
+                        {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
+                        {"loads", {{"gravity", {0, 0, -9.81}}}},
+                        {"coarse", {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {n, n, n}, "tet")}}}});
+}
+
+// A layered cube with the layers parallel to its clamped face: every method, on three coarse
+// meshes. On 3^3 cells of 1/8-thick layers the effective tensors are best (measured l2 0.095,
+// compliance 0.991; Reuss 0.129 / 0.947; naive = Voigt 0.9955 / 0.0045). On 1^3 and 2^3 cells
+// of 1/4-thick layers they are too soft and the Reuss average wins (measured effective-tensor
+// l2 0.47 / 0.56, compliance 1.44 / 1.65; Reuss l2 0.23 / 0.37). The coarse tets of a cell hold
+// the two materials in different proportions, so Eq. 8 gives them strongly different tensors,
+// and how the coarse solve combines them (not like a volume average) decides the result, as in
+// SpringsInSeriesGiveTheSeriesStiffness on a single cell. A limitation of the method, documented
+// in docs/guide.md and asserted here so the documentation stays true.
 TEST(EffectiveTensorSlow, LayeredCubeParallelToTheClampedFace) {
-    const test::Setup s = test::setup(
-        {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {16, 16, 16}, "hex")},
-         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.125}, {"ids", {1, 2}}}}}},
-         {"materials", {{"1", iso(1e5, 0.3)}, {"2", iso(1e2, 0.45)}}},
-         {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
-         {"loads", {{"gravity", {0, 0, -9.81}}}},
-         {"coarse", {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {3, 3, 3}, "tet")}}}});
-    const auto r = compare_methods(s, "layered cube, layers parallel to the clamped face");
-    for (const auto& [method, cmp] : r) {
-        EXPECT_TRUE(std::isfinite(cmp.l2_rel)) << method;
-        EXPECT_GT(cmp.compliance_ratio, 0.0) << method;
+    struct Case {
+        double thickness;
+        int cells;
+    };
+    std::map<std::pair<double, int>, std::map<std::string, test::Comparison>> r;
+    for (const Case k : {Case{0.125, 3}, Case{0.25, 1}, Case{0.25, 2}}) {
+        const test::Setup s = layered_cube(k.thickness, k.cells);
+        const std::string title =
+            fmt::format("layered cube, layers {} thick parallel to the clamped face, {}^3 cells",
+                        k.thickness, k.cells);
+        r[{k.thickness, k.cells}] = compare_methods(s, title.c_str());
+        const homogenize::Coarsening c =
+            homogenize::coarsening(s.scene, s.fine, "effective-tensor");
+        for (const Mandel6& C : c.C) {
+            const Eigen::SelfAdjointEigenSolver<Matrix> eig(Matrix(C.topLeftCorner(6, 6)));
+            EXPECT_GT(eig.eigenvalues()[0], 0.0);
+        }
     }
-    const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
-    for (const Mandel6& C : c.C) {
-        const Eigen::SelfAdjointEigenSolver<Matrix> eig(Matrix(C.topLeftCorner(6, 6)));
-        EXPECT_GT(eig.eigenvalues()[0], 0.0);
+    auto& fine_layers = r[{0.125, 3}];
+    for (const char* m : {"naive", "voigt", "reuss"})
+        EXPECT_LT(fine_layers["effective-tensor"].l2_rel, fine_layers[m].l2_rel) << m;
+    EXPECT_NEAR(fine_layers["effective-tensor"].compliance_ratio, 1.0, 0.05);
+    for (const int n : {1, 2}) {
+        auto& coarse_cells = r[{0.25, n}];
+        EXPECT_LT(coarse_cells["reuss"].l2_rel, coarse_cells["effective-tensor"].l2_rel) << n;
+        EXPECT_GT(coarse_cells["effective-tensor"].compliance_ratio, 1.3) << n;  // too soft
+        EXPECT_LT(coarse_cells["naive"].compliance_ratio, 0.01) << n;            // too stiff
     }
 }
 
