@@ -119,14 +119,57 @@ Matrix laminate_tensor(const Matrix& C1, const Matrix& C2) {
     return C;
 }
 
+/// Relative deviation from the Backus tensor of the interior coarse cell of a laminate.
+struct LaminateDeviation {
+    double out_of_plane;  ///< worst entry of the zz/yz/xz block over that block's norm
+    double in_plane;      ///< worst entry of the xx/yy/xy block over that block's norm
+    double worst_tet;     ///< worst single tet, |C_q - B| / |B|
+};
+
+/// Layers normal to z (E = contrast, nu 0.3 / E = 1, nu2; 1 fine cell per layer) on an
+/// n x n x 3 box, coarse cells of 1x1x1 spanning `periods` layer periods; the volume average of
+/// the 6 tets of the centre cell (middle of x, y and z) against the exact laminate tensor.
+LaminateDeviation laminate_deviation(int n, int periods, double contrast, double nu2) {
+    const test::Setup s = test::setup(
+        {{"mesh", grid({0, 0, 0}, {1.0 * n, 1.0 * n, 3}, {4 * n, 4 * n, 6 * periods}, "tet")},
+         {"material_field",
+          {{"layers", {{"axis", "z"}, {"thickness", 0.5 / periods}, {"ids", {1, 2}}}}}},
+         {"materials", {{"1", iso(contrast, 0.3)}, {"2", iso(1.0, nu2)}}},
+         {"coarse", {{"mesh", grid({0, 0, 0}, {1.0 * n, 1.0 * n, 3}, {n, n, 3}, "tet")}}}});
+    const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
+    const Matrix B = laminate_tensor(material::isotropic(3, contrast, 0.3, 1.0).C,
+                                     material::isotropic(3, 1.0, nu2, 1.0).C);
+    const Index cell = n / 2 + n * (n / 2 + n * 1);
+    Matrix avg = Matrix::Zero(6, 6);
+    LaminateDeviation d{0, 0, 0};
+    for (Index q = 6 * cell; q < 6 * cell + 6; ++q) {
+        avg += c.coarse_measures[q] * c.C[q];
+        d.worst_tet = std::max(d.worst_tet, (c.C[q] - B).norm() / B.norm());
+    }
+    avg /= c.coarse_measures.segment(6 * cell, 6).sum();
+    const std::array<int, 3> O = {2, 3, 4}, I = {0, 1, 5};
+    Matrix B_OO(3, 3), B_II(3, 3);
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            d.out_of_plane = std::max(d.out_of_plane, std::abs(avg(O[a], O[b]) - B(O[a], O[b])));
+            d.in_plane = std::max(d.in_plane, std::abs(avg(I[a], I[b]) - B(I[a], I[b])));
+            B_OO(a, b) = B(O[a], O[b]);
+            B_II(a, b) = B(I[a], I[b]);
+        }
+    d.out_of_plane /= B_OO.norm();
+    d.in_plane /= B_II.norm();
+    return d;
+}
+
 // Laminates: layers normal to z on a 3x3x3 box, coarse cells of 1x1x1 spanning 1, 2 or 4 layer
 // periods. For the interior coarse cell, the volume average of its 6 tets' effective tensors has
 // the out-of-plane block (C_zzzz, C_yzyz, C_xzxz and their couplings) of the exact laminate
 // tensor. Measured: 2e-14 to 6e-12 relative (to the out-of-plane block, growing with the
 // contrast like the round-off of the fine solve) for layers whose tensors are proportional
 // (equal Poisson ratios), for every contrast and period count, hence the bound 1e-8; with
-// different Poisson ratios (0.3 / 0.45, printed, not asserted) the same entries deviate by 2e-3
-// to 1e-2. The in-plane entries (6e-3 to 0.2) and the individual tets (0.15 to 1) deviate more.
+// different Poisson ratios (0.3 / 0.45, printed here, see the next test) the same entries
+// deviate by 2e-3 to 1e-2. The in-plane entries (6e-3 to 0.2) and the individual tets (0.15 to
+// 1) deviate more.
 TEST(EffectiveTensorSlow, LaminateOutOfPlaneEntriesAreExact) {
     std::printf("laminate, interior coarse cell: relative deviation from the Backus tensor\n");
     std::printf("  %8s %6s %6s %12s %12s %12s\n", "contrast", "nu2", "periods", "out-of-plane",
@@ -135,45 +178,33 @@ TEST(EffectiveTensorSlow, LaminateOutOfPlaneEntriesAreExact) {
         for (const double nu2 : {0.3, 0.45})
             for (const int periods : {1, 2, 4}) {
                 if (nu2 != 0.3 && contrast != 100.0) continue;
-                const test::Setup s = test::setup(
-                    {{"mesh", grid({0, 0, 0}, {3, 3, 3}, {12, 12, 6 * periods}, "tet")},
-                     {"material_field",
-                      {{"layers", {{"axis", "z"}, {"thickness", 0.5 / periods}, {"ids", {1, 2}}}}}},
-                     {"materials", {{"1", iso(contrast, 0.3)}, {"2", iso(1.0, nu2)}}},
-                     {"coarse", {{"mesh", grid({0, 0, 0}, {3, 3, 3}, {3, 3, 3}, "tet")}}}});
-                const homogenize::Coarsening c =
-                    homogenize::coarsening(s.scene, s.fine, "effective-tensor");
-                const Matrix B = laminate_tensor(material::isotropic(3, contrast, 0.3, 1.0).C,
-                                                 material::isotropic(3, 1.0, nu2, 1.0).C);
-                const Index cell = 1 + 3 * (1 + 3 * 1);  // the centre cell of the 3x3x3 grid
-                Matrix avg = Matrix::Zero(6, 6);
-                double worst_tet = 0;
-                for (Index q = 6 * cell; q < 6 * cell + 6; ++q) {
-                    avg += c.coarse_measures[q] * c.C[q];
-                    worst_tet = std::max(worst_tet, (c.C[q] - B).norm() / B.norm());
-                }
-                avg /= c.coarse_measures.segment(6 * cell, 6).sum();
-                const std::array<int, 3> O = {2, 3, 4}, I = {0, 1, 5};
-                double out = 0, in = 0;
-                for (int i : O)
-                    for (int j : O) out = std::max(out, std::abs(avg(i, j) - B(i, j)));
-                for (int i : I)
-                    for (int j : I) in = std::max(in, std::abs(avg(i, j) - B(i, j)));
-                Matrix B_OO(3, 3), B_II(3, 3);
-                for (int i = 0; i < 3; ++i)
-                    for (int j = 0; j < 3; ++j) {
-                        B_OO(i, j) = B(O[i], O[j]);
-                        B_II(i, j) = B(I[i], I[j]);
-                    }
-                out /= B_OO.norm();
-                in /= B_II.norm();
-                std::printf("  %8g %6.2f %6d %12.2e %12.2e %12.2e\n", contrast, nu2, periods, out,
-                            in, worst_tet);
+                const LaminateDeviation d = laminate_deviation(3, periods, contrast, nu2);
+                std::printf("  %8g %6.2f %6d %12.2e %12.2e %12.2e\n", contrast, nu2, periods,
+                            d.out_of_plane, d.in_plane, d.worst_tet);
                 if (nu2 == 0.3) {
-                    EXPECT_LT(out, 1e-8)
+                    EXPECT_LT(d.out_of_plane, 1e-8)
                         << "contrast " << contrast << ", " << periods << " periods";
                 }
             }
+}
+
+// Why the Poisson ratios matter. With proportional layer tensors C(z) = s(z) C0, the strain
+// ε = C(z)^-1 Σ of a uniform stress Σ = C0 ε0 with ε0 out-of-plane (zero xx, yy, xy) is
+// s(z)^-1 ε0: it varies with z alone and has no in-plane part, so it is compatible, and P1
+// tets aligned with the layers represent it exactly. The harmonic displacements of the
+// out-of-plane stresses are then the laminate's own fields in the whole finite box, and Eq. 8
+// reproduces the out-of-plane block exactly. With different Poisson ratios the laminate field
+// needs in-plane stresses that alternate from layer to layer, which the traction-free (in-plane)
+// lateral faces of the box do not allow: a boundary layer that reaches the interior cell and
+// decays as the box grows laterally. Measured (contrast 100, nu2 0.45, 1 period per cell):
+// 9.8e-3, 7.2e-3, 4.2e-3 on 3x3, 5x5, 7x7 boxes.
+TEST(EffectiveTensorSlow, LaminateOutOfPlaneDeviationIsALateralBoundaryEffect) {
+    const double d3 = laminate_deviation(3, 1, 100.0, 0.45).out_of_plane;
+    const double d7 = laminate_deviation(7, 1, 100.0, 0.45).out_of_plane;
+    std::printf("laminate, nu2 0.45: out-of-plane deviation %.2e (3x3 box), %.2e (7x7 box)\n", d3,
+                d7);
+    EXPECT_GT(d3, 1e-3);  // not round-off: a real deviation
+    EXPECT_LT(d7, 0.6 * d3);
 }
 
 /// The layered unit cube: layers normal to x (E = 1e5 / 1e2, nu = 0.3 / 0.45) of the given
