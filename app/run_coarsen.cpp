@@ -28,7 +28,8 @@ nlohmann::json errors_json(const coarsen::Errors& e) {
             {"energy_over_load", e.energy_over_load},
             {"l2_rel", e.l2_rel},
             {"max_displacement_rel", e.max_displacement_rel},
-            {"compliance_ratio", e.compliance_ratio}};
+            {"compliance_ratio", e.compliance_ratio},
+            {"stress_rel", e.stress_rel}};
 }
 
 void print_table(const scene::Scene& sc, const std::string& method, const scene::FineModel& fine,

@@ -109,6 +109,7 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
             EXPECT_LT(L["errors"]["energy_rel"].get<double>(), 1e-9);
             EXPECT_LT(L["errors"]["l2_rel"].get<double>(), 1e-9);
             EXPECT_NEAR(L["errors"]["compliance_ratio"].get<double>(), 1.0, 1e-9);
+            EXPECT_LT(L["errors"]["stress_rel"].get<double>(), 1e-9);
             EXPECT_TRUE(L["cond_A"].is_null());
             EXPECT_TRUE(L["sparsity_B"].is_null());
             EXPECT_TRUE(L["spectrum_skipped"].get<bool>());

@@ -23,15 +23,18 @@ struct LevelDiagnostics {
     double error_over_g = 0;
     double error_over_u = 0;  ///< ||u^k - u||_A / ||u||_A
     /// Extreme eigenvalues and condition numbers of A^k (Figs. 7, 8) and B^k (NaN at level q);
-    /// NaN also where the matrix has more rows than DiagnoseOptions::max_spectrum_dofs.
+    /// NaN also where skipped (spectrum_skipped).
     double lambda_min_A = 0, lambda_max_A = 0, cond_A = 0;
     double lambda_min_B = 0, lambda_max_B = 0, cond_B = 0;
     /// Fraction of zero entries (1 - stored nonzeros / (rows * cols)); explicitly stored zeros
     /// count as zeros. sparsity_C is of C̃^k (NaN at level q).
     double sparsity_A = 0, sparsity_B = 0, sparsity_C = 0;
     std::size_t bytes_Phi = 0, bytes_Psi = 0, bytes_C = 0, bytes_A = 0, bytes_B = 0;
-    double build_seconds = 0;       ///< Level::build_seconds (0 at level q, which is not built)
-    bool spectrum_skipped = false;  ///< A^k or B^k has more rows than max_spectrum_dofs
+    double build_seconds = 0;  ///< Level::build_seconds (0 at level q, which is not built)
+    /// The spectrum of A^k or B^k was not computed: more rows than max_spectrum_dofs, or
+    /// Lanczos did not converge (an optional figure never fails the diagnostics).
+    bool spectrum_skipped = false;
+    std::string spectrum_note;  ///< why, if skipped (not in the CSV)
 };
 
 struct Diagnostics {
@@ -74,7 +77,8 @@ std::string to_csv(const Diagnostics& d);
 /// to_csv(d), written atomically.
 void write_csv(const Diagnostics& d, const std::string& file);
 
-/// The fields of one level as a JSON object (keys as the CSV columns; NaN becomes null).
+/// The fields of one level as a JSON object (keys as the CSV columns plus spectrum_note; NaN
+/// becomes null).
 nlohmann::json to_json(const LevelDiagnostics& L);
 
 }  // namespace coarsegrain::mra
