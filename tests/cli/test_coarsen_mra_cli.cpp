@@ -49,6 +49,13 @@ std::string read_bytes(const std::string& file) {
     return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
 }
 
+const Matrix& field(const std::vector<io::Field>& fields, const std::string& name) {
+    for (const io::Field& f : fields)
+        if (f.name == name) return f.values;
+    ADD_FAILURE() << "no field " << name;
+    return fields.front().values;
+}
+
 double number(const json& j, const char* key) {
     EXPECT_TRUE(j.contains(key) && j[key].is_number()) << key << " in " << j.dump();
     return j.value(key, std::nan(""));
@@ -113,6 +120,8 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
             EXPECT_TRUE(L["cond_A"].is_null());
             EXPECT_TRUE(L["sparsity_B"].is_null());
             EXPECT_TRUE(L["spectrum_skipped"].get<bool>());
+            EXPECT_THAT(L["spectrum_note"].get<std::string>(),
+                        HasSubstr("A: 544 rows > max_spectrum_dofs 400"));
             for (std::size_t p = 0; p < 2; ++p)
                 for (std::size_t d = 0; d < 2; ++d)
                     EXPECT_NEAR(L["probes"][p]["u"][d].get<double>(),
@@ -160,6 +169,19 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
     for (const char* name :
          {"C_eff", "E_x", "E_y", "E_min", "E_max", "E_directions", "stress_coarse", "stress_fine"})
         EXPECT_THAT(names, ::testing::Contains(std::string(name)));
+    // The cell stresses are the means of the fine-mesh stresses of level 1 and of the fine
+    // solve over the 8x8 fine cells of each coarsest cell (equal volumes; 1e-12 relative).
+    for (const auto& [coarse_field, vtu] :
+         {std::pair<std::string, std::string>{"stress_coarse", "solution_level_1.vtu"},
+          {"stress_fine", "solution_fine.vtu"}}) {
+        const auto [fmesh, ffields] = io::read_vtu(dir + "/out/" + vtu);
+        const Matrix& fine_stress = field(ffields.cell_data, "stress");
+        const Matrix& cell_stress = field(cfields.cell_data, coarse_field);
+        Matrix mean = Matrix::Zero(4, fine_stress.cols());
+        for (Index e = 0; e < 256; ++e)
+            mean.row((e % 16) / 8 + 2 * ((e / 16) / 8)) += fine_stress.row(e) / 64.0;
+        EXPECT_LT((mean - cell_stress).norm(), 1e-12 * mean.norm()) << coarse_field;
+    }
 }
 
 TEST(CliCoarsenMra, PlotsAreOptional) {
