@@ -71,14 +71,16 @@ Matrix cell_mean_stress(const scene::FineModel& fine, const Vector& u,
 
 /// Sec. 5.6 outputs of compare_levels: coarsest_cells.vtu and the report's "coarsest_cells".
 void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const Vector& u1,
-                        const Vector& u, coarsen::FineComparison& c) {
+                        const Vector& u, bool enabled, coarsen::FineComparison& c) {
     const int dim = h.dim;
     const Eigen::Vector3i cells = h.level(1).cells;
     const Index nc = cell_count(cells, dim);
     nlohmann::json& report = c.report["coarsest_cells"];
     report["cells"] = nc;
-    if (nc > kCellTensorsMaxCells) {
-        report["skipped"] = fmt::format("{} coarsest cells > {}", nc, kCellTensorsMaxCells);
+    if (!enabled || nc > kCellTensorsMaxCells) {
+        report["skipped"] = enabled
+                                ? fmt::format("{} coarsest cells > {}", nc, kCellTensorsMaxCells)
+                                : std::string("coarse.cell_tensors is false");
         return;
     }
     const std::vector<CellTensor> tensors =
@@ -263,21 +265,27 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
     return m;
 }
 
-Index parse_spectrum_max_dofs(const nlohmann::json& coarse, const std::string& source) {
-    if (coarse.is_null()) return kSpectrumMaxDofs;
+CompareOptions parse_compare_options(const nlohmann::json& coarse, const std::string& source) {
+    CompareOptions o;
+    if (coarse.is_null()) return o;
     const scene::JsonReader r(coarse, "coarse", source);
-    const auto v = r.find("spectrum_max_dofs");
-    if (!v) return kSpectrumMaxDofs;
-    const Index n = v->integer();
-    v->fail_unless(n >= 0, "expected an integer >= 0, got {}", n);
-    return n;
+    if (auto v = r.find("spectrum_max_dofs")) {
+        o.max_spectrum_dofs = v->integer();
+        v->fail_unless(o.max_spectrum_dofs >= 0, "expected an integer >= 0, got {}",
+                       o.max_spectrum_dofs);
+    }
+    if (auto v = r.find("cell_tensors")) {
+        v->fail_unless(v->json().is_boolean(), "expected true or false, got {}", v->json().dump());
+        o.cell_tensors = v->json().get<bool>();
+    }
+    return o;
 }
 
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
                                        const nlohmann::json& build_levels,
-                                       Index max_spectrum_dofs) {
+                                       const CompareOptions& options) {
     const int q = h.num_levels();
-    const Diagnostics d = diagnose(h, fine.f, {max_spectrum_dofs, true});
+    const Diagnostics d = diagnose(h, fine.f, {options.max_spectrum_dofs, true});
     coarsen::FineComparison c;
     nlohmann::json levels = nlohmann::json::array();
     for (int k = 1; k <= q; ++k) {
@@ -296,18 +304,18 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
                                      fmt::format("/levels/{}", k - 1)});
     }
     c.report["levels"] = levels;
-    c.report["spectrum_max_dofs"] = max_spectrum_dofs;
+    c.report["spectrum_max_dofs"] = options.max_spectrum_dofs;
     c.files.push_back({"mra_levels.csv", to_csv(d)});
     c.plots.push_back({"plot_mra.py",
                        {"mra_errors.png", "mra_levels.csv", "--cond", "mra_condition.png"},
                        {"mra_errors.png", "mra_condition.png"}});
-    add_coarsest_cells(h, fine, d.solutions.front(), d.solutions.back(), c);
+    add_coarsest_cells(h, fine, d.solutions.front(), d.solutions.back(), options.cell_tensors, c);
     return c;
 }
 
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine) {
     const Options options = parse_options(scene.coarse, scene.source);
-    const Index max_spectrum_dofs = parse_spectrum_max_dofs(scene.coarse, scene.source);
+    const CompareOptions compare = parse_compare_options(scene.coarse, scene.source);
     for (std::size_t k = 0; k < fine.bc.dofs.size(); ++k)
         CG_VERIFY_AS(InvalidScene, fine.bc.values[static_cast<Index>(k)] == 0.0,
                      "{}: dirichlet: the mra method supports only zero prescribed displacements, "
@@ -326,9 +334,9 @@ coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::
     const auto h = std::make_shared<const Hierarchy>(
         build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options));
     coarsen::CoarseModel m = coarse_model(*h, fine.f);
-    m.compare_with_fine = [h, build_levels = m.report["levels"], max_spectrum_dofs](
+    m.compare_with_fine = [h, build_levels = m.report["levels"], compare](
                               const scene::Scene&, const scene::FineModel& f, const Vector&) {
-        return compare_levels(*h, f, build_levels, max_spectrum_dofs);
+        return compare_levels(*h, f, build_levels, compare);
     };
     return m;
 }

@@ -184,11 +184,15 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
     }
 }
 
-TEST(CliCoarsenMra, PlotsAreOptional) {
+// Without a usable Python the run succeeds and says how to make the plots; the cell tensors
+// can be switched off.
+TEST(CliCoarsenMra, PlotsAndCellTensorsAreOptional) {
     const std::string dir = temp_dir("cli_mra_no_python");
+    json scene = layered_scene();
+    scene["coarse"]["cell_tensors"] = false;
     std::string output;
     EXPECT_EQ(run("COARSEGRAIN_PYTHON=/nonexistent/python3 " + kCli + " --quiet coarsen " +
-                      write_scene(dir, layered_scene()) + " --method mra --out " + dir + "/out",
+                      write_scene(dir, scene) + " --method mra --out " + dir + "/out",
                   &output),
               0)
         << output;
@@ -196,6 +200,8 @@ TEST(CliCoarsenMra, PlotsAreOptional) {
     EXPECT_THAT(output, HasSubstr("plot_mra.py"));
     const json s = read_json(dir + "/out/summary.json");
     EXPECT_TRUE(s["plots"].empty());
+    EXPECT_EQ(s["coarse"]["coarsest_cells"]["skipped"], "coarse.cell_tensors is false");
+    EXPECT_FALSE(std::filesystem::exists(dir + "/out/coarsest_cells.vtu"));
     EXPECT_TRUE(std::filesystem::exists(dir + "/out/mra_levels.csv"));
 }
 

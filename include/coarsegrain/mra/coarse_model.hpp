@@ -34,15 +34,20 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source);
 /// A and B, and storage bytes of Φ and Ψ; `timings` the phases of h.
 coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine);
 
-/// Default of the scene key coarse.spectrum_max_dofs: levels whose A^k or B^k has more rows get
-/// no condition number in the summary. Each spectrum costs a factorization and tens of Lanczos
-/// solves: measured 0.35 s for A of 20200 rows (2D 100x100 grid, 2 shared cores), more in 3D
-/// where factorizations fill in.
-inline constexpr Index kSpectrumMaxDofs = 20000;
+/// Options of compare_levels, read from the scene's "coarse" block (parse_compare_options).
+struct CompareOptions {
+    /// coarse.spectrum_max_dofs (integer >= 0): levels whose A^k or B^k has more rows get no
+    /// condition number. Each spectrum costs a factorization and tens of Lanczos solves:
+    /// measured 0.35 s for A of 20200 rows (2D 100x100 grid, 2 shared cores), more in 3D where
+    /// factorizations fill in.
+    Index max_spectrum_dofs = 20000;
+    /// coarse.cell_tensors (true | false): compute the Sec. 5.6 cell tensors. Each coarsest cell
+    /// gets its own free-body hierarchy, so a single coarsest cell costs a second full build.
+    bool cell_tensors = true;
+};
 
-/// Reads coarse.spectrum_max_dofs (an integer >= 0; default kSpectrumMaxDofs).
-/// @throws InvalidScene naming `coarse.spectrum_max_dofs` and the source
-Index parse_spectrum_max_dofs(const nlohmann::json& coarse, const std::string& source);
+/// @throws InvalidScene naming `coarse.<key>` and the source
+CompareOptions parse_compare_options(const nlohmann::json& coarse, const std::string& source);
 
 /// Cell tensors (cell_tensors.hpp) are computed only for coarsest grids of at most this many
 /// cells (one small free-body hierarchy each).
@@ -50,8 +55,8 @@ inline constexpr Index kCellTensorsMaxCells = 1024;
 
 /// Figures of every level of `h` against the fine solution, for the summary of
 /// `coarsen --method mra`: mra::diagnose for the load fine.f with DiagnoseOptions
-/// {max_spectrum_dofs, keep_solutions}. The report's "levels" has q entries, level k at index
-/// k-1: `build_levels[k-1]` (the coarse_model report of level k; for level q its cells, nodes
+/// {options.max_spectrum_dofs, keep_solutions}. The report's "levels" has q entries, level k at
+/// index k-1: `build_levels[k-1]` (the coarse_model report of level k; for level q its cells, nodes
 /// and the nonzeros of A^q) updated with to_json of the level's diagnostics; "spectrum_max_dofs"
 /// states the limit. Each level's single-level solve u^k = Φ^{k,T} (A^k)^{-1} g^k (Sec. 4.1)
 /// is a reconstruction "level_<k>" reported at "/levels/<k-1>"; the CSV is mra_levels.csv
@@ -65,13 +70,14 @@ inline constexpr Index kCellTensorsMaxCells = 1024;
 /// "stress_coarse" = mean σ(u^1), and from the fine solve, "stress_fine" (physical components,
 /// as solution VTUs; Fig. 16). The report's "coarsest_cells" has the file, the cells, E_min and
 /// E_max over all cells and directions, and per cell "E_axes", "E_min", "E_max". Skipped (with
-/// "skipped" saying why) above kCellTensorsMaxCells cells.
+/// "skipped" saying why) above kCellTensorsMaxCells cells or if !options.cell_tensors.
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
-                                       const nlohmann::json& build_levels, Index max_spectrum_dofs);
+                                       const nlohmann::json& build_levels,
+                                       const CompareOptions& options);
 
 /// Builds the hierarchy from scene.coarse options (parse_options) and returns the coarsest
-/// level as a CoarseModel (coarse_model) whose compare_with_fine is compare_levels (the
-/// hierarchy is kept alive by it).
+/// level as a CoarseModel (coarse_model) whose compare_with_fine is compare_levels with
+/// parse_compare_options (the hierarchy is kept alive by it).
 /// @throws InvalidScene for bad options or nonzero Dirichlet values; Error as build_hierarchy
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine);
 
