@@ -8,11 +8,13 @@
 /// boundary, coarse-grained to the coarsest level as every load is (Sec. 4.1):
 /// g(σ) = C̃^1 ... C̃^{q-1} f(σ). With the Mandel unit stresses σ_a this gives the coarsest
 /// compliance S_ab = g(σ_a)^T (A^1)^+ g(σ_b) / |cell| (A^1 is singular on a free body; the loads
-/// are self-equilibrated and A^1's kernel is exactly the rigid motions thanks to the invariance
-/// correction), the effective tensor C = S^{-1} and E(d) = 1 / (d⊗d : S : d⊗d).
+/// are self-equilibrated and A^1's kernel is the rigid motions thanks to the invariance
+/// correction, exactly with global solves and no truncation, up to a small perturbation
+/// otherwise: the pseudo-inverse drops the dim(dim+1)/2 smallest eigenvalues), the effective
+/// tensor C = S^{-1} and E(d) = 1 / (d⊗d : S : d⊗d).
 ///
-/// Galerkin bound: u^1 = Φ^{1,T} (A^1)^+ g is the energy projection of the fine solution u of
-/// the same free-body problem, so for every σ
+/// Galerkin bound (global solves, no truncation): u^1 = Φ^{1,T} (A^1)^+ g is the energy projection
+/// of the fine solution u of the same free-body problem, so for every σ
 ///   σ : S_fine : σ - σ : S : σ = ||u - u^1||_K^2 / |cell|,
 /// the coarse cell is stiffer than the fine one by exactly its homogenization error. For a
 /// homogeneous material S_fine = C^{-1} (the linear field is the exact fine solution).
@@ -40,8 +42,8 @@ Matrix uniform_stress_loads(const mesh::Mesh& mesh);
 /// along every axis) as a free body, see the file comment.
 /// @param[in] options  hierarchy options; levels is set from the grid and the invariance
 ///                     correction is turned on (A^1's kernel must be the rigid motions)
-/// @throws Error if the grid is not 2^m cells along every axis, or A^1's kernel is not the
-///         rigid motions (numerical rank test, 1e-9 relative to its largest eigenvalue)
+/// @throws Error if the grid is not 2^m cells along every axis, or A^1's smallest
+///         dim(dim+1)/2 eigenvalues are not below 1e-2 of the next one in absolute value
 CellTensor coarsest_cell_tensor(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
                                 Options options);
 
