@@ -90,16 +90,16 @@ void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const 
     Matrix C_voigt(nc, n * n), E_dir(nc, D.rows()), E_axes(nc, dim);
     nlohmann::json per_cell = nlohmann::json::array();
     for (Index i = 0; i < nc; ++i) {
-        const Matrix Cv = material::mandel_to_voigt(tensors[static_cast<std::size_t>(i)].C);
+        const Matrix& C = tensors[static_cast<std::size_t>(i)].C;
+        const Matrix Cv = material::mandel_to_voigt(C);
         C_voigt.row(i) = Eigen::Map<const Vector>(Cv.data(), n * n).transpose();
         for (Index j = 0; j < D.rows(); ++j)
-            E_dir(i, j) = material::directional_young(tensors[static_cast<std::size_t>(i)].C,
-                                                      D.row(j).transpose());
-        for (int a = 0; a < dim; ++a)
-            E_axes(i, a) = material::directional_young(tensors[static_cast<std::size_t>(i)].C,
-                                                       Eigen::VectorXd::Unit(dim, a));
+            E_dir(i, j) = material::directional_young(C, D.row(j).transpose());
         std::vector<double> axes;
-        for (int a = 0; a < dim; ++a) axes.push_back(E_axes(i, a));
+        for (int a = 0; a < dim; ++a) {
+            E_axes(i, a) = material::directional_young(C, Eigen::VectorXd::Unit(dim, a));
+            axes.push_back(E_axes(i, a));
+        }
         per_cell.push_back({{"E_axes", axes},
                             {"E_min", E_dir.row(i).minCoeff()},
                             {"E_max", E_dir.row(i).maxCoeff()}});
@@ -120,6 +120,15 @@ void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const 
     out.fields.add_cell("stress_coarse", mandel_to_physical(cell_mean_stress(fine, u1, cells)));
     out.fields.add_cell("stress_fine", mandel_to_physical(cell_mean_stress(fine, u, cells)));
     c.outputs.push_back(std::move(out));
+    std::string csv = dim == 2 ? "cell,dx,dy,E\n" : "cell,dx,dy,dz,E\n";
+    for (Index i = 0; i < nc; ++i)
+        for (Index j = 0; j < D.rows(); ++j)
+            csv += fmt::format("{},{:.17g},{:.17g},{}{:.17g}\n", i, D(j, 0), D(j, 1),
+                               dim == 3 ? fmt::format("{:.17g},", D(j, 2)) : "", E_dir(i, j));
+    c.files.push_back({"coarsest_youngs.csv", csv});
+    c.plots.push_back({"plot_youngs.py",
+                       {"coarsest_youngs.png", "coarsest_youngs.csv"},
+                       {"coarsest_youngs.png"}});
     report["vtu"] = "coarsest_cells.vtu";
     report["E_min"] = E_dir.minCoeff();
     report["E_max"] = E_dir.maxCoeff();

@@ -149,8 +149,9 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
     while (std::getline(csv, line)) ++rows;
     EXPECT_EQ(rows, 4);
     // Plots: /usr/bin/python3 with matplotlib is on this machine, so both are made.
-    EXPECT_EQ(s["plots"], json::array({"mra_errors.png", "mra_condition.png"}));
-    for (const char* png : {"mra_errors.png", "mra_condition.png"}) {
+    EXPECT_EQ(s["plots"],
+              json::array({"mra_errors.png", "mra_condition.png", "coarsest_youngs.png"}));
+    for (const char* png : {"mra_errors.png", "mra_condition.png", "coarsest_youngs.png"}) {
         const std::string bytes = read_bytes(dir + "/out/" + png);
         EXPECT_GT(bytes.size(), 5000u) << png;
         EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << png;
