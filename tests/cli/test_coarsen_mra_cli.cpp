@@ -206,6 +206,17 @@ TEST(CliCoarsenMra, PlotsAndCellTensorsAreOptional) {
     EXPECT_TRUE(std::filesystem::exists(dir + "/out/mra_levels.csv"));
 }
 
+TEST(CliCoarsenMra, YoungsPlotRejectsABadTable) {
+    const std::string dir = temp_dir("cli_mra_youngs_bad");
+    std::ofstream(dir + "/bad.csv") << "cell,dx,E\n0,1,2\n";
+    std::string output;
+    EXPECT_NE(run("/usr/bin/python3 " COARSEGRAIN_TEST_DATA "/../../scripts/plot_youngs.py " + dir +
+                      "/x.png " + dir + "/bad.csv",
+                  &output),
+              0);
+    EXPECT_THAT(output, HasSubstr("missing column(s) dy"));
+}
+
 TEST(CliCoarsenMra, MaterialFromPngImage) {
     const std::string dir = temp_dir("cli_mra_png");
     // 16x16 grayscale: a black (stiff) ring of width 2 on white, pixel to cell one to one.
