@@ -11,6 +11,7 @@
 #include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/io/file_util.hpp"
 #include "output.hpp"
+#include "plots.hpp"
 
 namespace coarsegrain::app {
 
@@ -27,7 +28,8 @@ nlohmann::json errors_json(const coarsen::Errors& e) {
             {"energy_over_load", e.energy_over_load},
             {"l2_rel", e.l2_rel},
             {"max_displacement_rel", e.max_displacement_rel},
-            {"compliance_ratio", e.compliance_ratio}};
+            {"compliance_ratio", e.compliance_ratio},
+            {"stress_rel", e.stress_rel}};
 }
 
 void print_table(const scene::Scene& sc, const std::string& method, const scene::FineModel& fine,
@@ -69,6 +71,45 @@ coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
     return s;
 }
 
+// Writes solution_<name>.vtu of a fine displacement u_c (fields as the fine solution's, plus its
+// error against u) and returns its summary figures: "errors", "probes" and "vtu".
+nlohmann::json write_solution(const std::filesystem::path& dir, const std::string& name,
+                              const scene::Scene& sc, const scene::FineModel& fine, const Vector& u,
+                              const Vector& u_c) {
+    const std::string file = "solution_" + name + ".vtu";
+    io::VtuFields fields = solution_fields(fine, u_c);
+    fields.add_point_vector("error", u_c - u, fine.mesh.dim());
+    io::write_vtu((dir / file).string(), fine.mesh, fields);
+    return {{"errors", errors_json(coarsen::compare(fine, u, u_c))},
+            {"probes", probes_json(sc, scene::probe_displacements(sc, fine.mesh, u_c))},
+            {"vtu", file}};
+}
+
+// The method's figures and files that need the fine solution (CoarseModel::compare_with_fine):
+// merged into `coarse_json`, written to `dir`; plots are made last. Returns the plot images
+// made. The phase "compare" goes to `timings`.
+nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene::Scene& sc,
+                                 const scene::FineModel& fine, const Vector& u,
+                                 const std::filesystem::path& dir, nlohmann::json& coarse_json,
+                                 Timings& timings) {
+    nlohmann::json made = nlohmann::json::array();
+    if (!coarse.compare_with_fine) return made;
+    const Phase phase("compare", &timings);
+    const coarsen::FineComparison c = coarse.compare_with_fine(sc, fine, u);
+    coarse_json.merge_patch(c.report);
+    for (const coarsen::Reconstruction& r : c.reconstructions)
+        coarse_json[nlohmann::json::json_pointer(r.report_pointer)].update(
+            write_solution(dir, r.name, sc, fine, u, r.u));
+    for (const coarsen::VtuOutput& o : c.outputs)
+        io::write_vtu((dir / o.file).string(), o.mesh, o.fields);
+    for (const coarsen::FileOutput& f : c.files)
+        io::write_atomically((dir / f.file).string(), [&](std::ostream& os) { os << f.content; });
+    for (const coarsen::PlotOutput& p : c.plots)
+        if (make_plot(dir.string(), p))
+            for (const std::string& f : p.files) made.push_back(f);
+    return made;
+}
+
 }  // namespace
 
 void run_coarsen(const scene::Scene& sc, const std::string& method, const std::string& out_dir,
@@ -101,6 +142,7 @@ void run_coarsen(const scene::Scene& sc, const std::string& method, const std::s
     nlohmann::json fine_json = fine_sizes(fine);
     fine_json["timings"] = timings_json(tf);
     nlohmann::json coarse_json = coarse.report;
+    const nlohmann::json plots = compare_with_fine(coarse, sc, fine, u.u, dir, coarse_json, tc);
     coarse_json["nodes"] = coarse.nodes;
     coarse_json["elements"] = coarse.elements;
     coarse_json["dofs"] = coarse.K.rows();
@@ -128,6 +170,7 @@ void run_coarsen(const scene::Scene& sc, const std::string& method, const std::s
             {"compliance", coarse.f.dot(uc.u)},
             {"fine_max_displacement", nodal_magnitude(u.u, dim).maxCoeff()},
             {"fine_strain_energy", u.strain_energy},
+            {"plots", plots},
             {"peak_memory_mb", peak_rss_mb()},
         });
     print_table(sc, method, fine, coarse, tf, tc, e);

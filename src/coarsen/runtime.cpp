@@ -1,7 +1,10 @@
 #include "coarsegrain/coarsen/runtime.hpp"
 
+#include <cmath>
+
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
+#include "coarsegrain/fem/stress.hpp"
 
 namespace coarsegrain::coarsen {
 
@@ -13,6 +16,20 @@ double max_nodal_norm(const Vector& u, int dim) {
 
 double energy_norm(const SparseMatrix& K, const Vector& v) {
     return std::sqrt(std::max(0.0, v.dot(K * v)));
+}
+
+/// sqrt(sum_e |e| |sigma_c,e - sigma_e|^2 / sum_e |e| |sigma_e|^2), Frobenius norms of the
+/// element stresses (Mandel vectors carry them: |s|_2 = |sigma|_F).
+double stress_error(const scene::FineModel& fine, const Vector& u, const Vector& u_c) {
+    const Matrix s = fem::element_stress(fine.mesh, fine.materials, u).stress;
+    const Matrix s_c = fem::element_stress(fine.mesh, fine.materials, u_c).stress;
+    double num = 0, den = 0;
+    for (Index e = 0; e < fine.mesh.num_elements(); ++e) {
+        const double v = mesh::element_measure(fine.mesh, e);
+        num += v * (s_c.row(e) - s.row(e)).squaredNorm();
+        den += v * s.row(e).squaredNorm();
+    }
+    return den > 0 ? std::sqrt(num / den) : 0.0;
 }
 
 }  // namespace
@@ -55,6 +72,7 @@ Errors compare(const scene::FineModel& fine, const Vector& u, const Vector& u_c)
     r.l2_rel = e.norm() / u_norm;
     r.max_displacement_rel = std::abs(max_nodal_norm(u_c, dim) - u_max) / u_max;
     r.compliance_ratio = fine.f.dot(u_c) / compliance;
+    r.stress_rel = stress_error(fine, u, u_c);
     return r;
 }
 

@@ -1,10 +1,16 @@
 #include "coarsegrain/mra/coarse_model.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "../scene/json_reader.hpp"
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/fem/stress.hpp"
+#include "coarsegrain/mesh/grid.hpp"
+#include "coarsegrain/mra/cell_tensors.hpp"
 
 namespace coarsegrain::mra {
 
@@ -21,6 +27,112 @@ double parse_radius(const scene::JsonReader& r) {
     const double v = r.number();
     r.fail_unless(v >= 1, "expected a number >= 1 or \"inf\", got {}", v);
     return v;
+}
+
+/// Number of cells of a grid with `cells` per axis in `dim` dimensions.
+Index cell_count(const Eigen::Vector3i& cells, int dim) {
+    Index n = 1;
+    for (int d = 0; d < dim; ++d) n *= cells[d];
+    return n;
+}
+
+/// Physical components (shear / √2) of Mandel rows.
+Matrix mandel_to_physical(Matrix m) {
+    const int first_shear = m.cols() == 6 ? 3 : 2;
+    m.rightCols(m.cols() - first_shear) *= kInvSqrt2;
+    return m;
+}
+
+/// Volume-weighted mean of the fine element stress of u over each coarsest cell (Mandel rows).
+Matrix cell_mean_stress(const scene::FineModel& fine, const Vector& u,
+                        const Eigen::Vector3i& coarse_cells) {
+    const int dim = fine.mesh.dim();
+    const mesh::GridInfo& g = *fine.mesh.grid;
+    const Matrix stress = fem::element_stress(fine.mesh, fine.materials, u).stress;
+    const Index per_cell = fine.mesh.num_elements() / cell_count(g.cells, dim);
+    Matrix sum = Matrix::Zero(cell_count(coarse_cells, dim), stress.cols());
+    Vector volume = Vector::Zero(sum.rows());
+    for (Index e = 0; e < fine.mesh.num_elements(); ++e) {
+        const Index fc = e / per_cell;
+        Index c = 0, stride = 1;
+        Index rest = fc;
+        for (int d = 0; d < dim; ++d) {
+            const Index i = rest % g.cells[d];
+            rest /= g.cells[d];
+            c += stride * (i / (g.cells[d] / coarse_cells[d]));
+            stride *= coarse_cells[d];
+        }
+        const double v = mesh::element_measure(fine.mesh, e);
+        sum.row(c) += v * stress.row(e);
+        volume[c] += v;
+    }
+    return volume.cwiseInverse().asDiagonal() * sum;
+}
+
+/// Sec. 5.6 outputs of compare_levels: coarsest_cells.vtu and the report's "coarsest_cells".
+void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const Vector& u1,
+                        const Vector& u, bool enabled, coarsen::FineComparison& c) {
+    const int dim = h.dim;
+    const Eigen::Vector3i cells = h.level(1).cells;
+    const Index nc = cell_count(cells, dim);
+    nlohmann::json& report = c.report["coarsest_cells"];
+    report["cells"] = nc;
+    if (!enabled || nc > kCellTensorsMaxCells) {
+        report["skipped"] = enabled
+                                ? fmt::format("{} coarsest cells > {}", nc, kCellTensorsMaxCells)
+                                : std::string("coarse.cell_tensors is false");
+        return;
+    }
+    const std::vector<CellTensor> tensors =
+        coarsest_cell_tensors(fine.mesh, fine.materials, cells, h.options);
+    const Matrix D = youngs_directions(dim);
+    const int n = mandel_size(dim);
+    Matrix C_voigt(nc, n * n), E_dir(nc, D.rows()), E_axes(nc, dim);
+    nlohmann::json per_cell = nlohmann::json::array();
+    for (Index i = 0; i < nc; ++i) {
+        const Matrix& C = tensors[static_cast<std::size_t>(i)].C;
+        const Matrix Cv = material::mandel_to_voigt(C);
+        C_voigt.row(i) = Eigen::Map<const Vector>(Cv.data(), n * n).transpose();
+        for (Index j = 0; j < D.rows(); ++j)
+            E_dir(i, j) = material::directional_young(C, D.row(j).transpose());
+        std::vector<double> axes;
+        for (int a = 0; a < dim; ++a) {
+            E_axes(i, a) = material::directional_young(C, Eigen::VectorXd::Unit(dim, a));
+            axes.push_back(E_axes(i, a));
+        }
+        per_cell.push_back({{"E_axes", axes},
+                            {"E_min", E_dir.row(i).minCoeff()},
+                            {"E_max", E_dir.row(i).maxCoeff()}});
+    }
+    coarsen::VtuOutput out;
+    out.file = "coarsest_cells.vtu";
+    Eigen::VectorXi grid_cells(dim);
+    for (int d = 0; d < dim; ++d) grid_cells[d] = cells[d];
+    out.mesh =
+        mesh::make_grid(dim == 2 ? mesh::ElementType::Quad4 : mesh::ElementType::Hex8,
+                        fine.mesh.grid->min.head(dim), fine.mesh.grid->max.head(dim), grid_cells);
+    out.fields.add_cell("C_eff", C_voigt);
+    const char* axis_names[] = {"E_x", "E_y", "E_z"};
+    for (int a = 0; a < dim; ++a) out.fields.add_cell_scalar(axis_names[a], E_axes.col(a));
+    out.fields.add_cell_scalar("E_min", E_dir.rowwise().minCoeff());
+    out.fields.add_cell_scalar("E_max", E_dir.rowwise().maxCoeff());
+    out.fields.add_cell("E_directions", E_dir);
+    out.fields.add_cell("stress_coarse", mandel_to_physical(cell_mean_stress(fine, u1, cells)));
+    out.fields.add_cell("stress_fine", mandel_to_physical(cell_mean_stress(fine, u, cells)));
+    c.outputs.push_back(std::move(out));
+    std::string csv = dim == 2 ? "cell,dx,dy,E\n" : "cell,dx,dy,dz,E\n";
+    for (Index i = 0; i < nc; ++i)
+        for (Index j = 0; j < D.rows(); ++j)
+            csv += fmt::format("{},{:.17g},{:.17g},{}{:.17g}\n", i, D(j, 0), D(j, 1),
+                               dim == 3 ? fmt::format("{:.17g},", D(j, 2)) : "", E_dir(i, j));
+    c.files.push_back({"coarsest_youngs.csv", csv});
+    c.plots.push_back({"plot_youngs.py",
+                       {"coarsest_youngs.png", "coarsest_youngs.csv"},
+                       {"coarsest_youngs.png"}});
+    report["vtu"] = "coarsest_cells.vtu";
+    report["E_min"] = E_dir.minCoeff();
+    report["E_max"] = E_dir.maxCoeff();
+    report["per_cell"] = per_cell;
 }
 
 double density(const SparseMatrix& M) {
@@ -41,8 +153,8 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
     }
     if (auto v = r.find("refinement")) {
         const std::string s = v->string();
-        v->fail_unless(s == "dirac" || s == "linear", "expected \"dirac\" or \"linear\", got \"{}\"",
-                       s);
+        v->fail_unless(s == "dirac" || s == "linear",
+                       "expected \"dirac\" or \"linear\", got \"{}\"", s);
         o.refinement = s == "dirac" ? Refinement::Dirac : Refinement::Linear;
     }
     if (auto v = r.find("radius")) {
@@ -119,7 +231,8 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
     m.f = P * coarse_grain(h, f_fine, 1);
     m.to_fine = SparseMatrix(L1.Phi.transpose()) * SparseMatrix(P.transpose());
     m.to_fine.makeCompressed();
-    std::vector<Index> dropped(L1.dropped_dofs.data(), L1.dropped_dofs.data() + L1.dropped_dofs.size());
+    std::vector<Index> dropped(L1.dropped_dofs.data(),
+                               L1.dropped_dofs.data() + L1.dropped_dofs.size());
     if (!dropped.empty()) {
         m.bc.dofs = dropped;
         m.bc.values = Vector::Zero(static_cast<Index>(dropped.size()));
@@ -128,7 +241,8 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
 
     const Options& o = h.options;
     nlohmann::json radius = nlohmann::json::array();
-    for (const double r : o.radius) radius.push_back(std::isinf(r) ? nlohmann::json("inf") : nlohmann::json(r));
+    for (const double r : o.radius)
+        radius.push_back(std::isinf(r) ? nlohmann::json("inf") : nlohmann::json(r));
     m.report["options"] = {{"levels", o.levels},
                            {"refinement", refinement_name(o.refinement)},
                            {"radius", radius},
@@ -138,29 +252,79 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
                            {"dirichlet", dirichlet_name(o.dirichlet)}};
     nlohmann::json levels = nlohmann::json::array();
     for (const Level& L : h.levels) {
-        levels.push_back({{"level", L.k},
-                          {"cells", std::vector<int>(L.cells.data(), L.cells.data() + dim)},
-                          {"nodes", grid_nodes(L.cells, dim)},
-                          {"dofs", L.dofs.size()},
-                          {"wavelets", L.W.rows()},
-                          {"radius", std::isinf(L.radius) ? nlohmann::json("inf") : nlohmann::json(L.radius)},
-                          {"build_seconds", L.build_seconds},
-                          {"C_nnz", L.C_adapted.nonZeros()},
-                          {"C_density", density(L.C_adapted)},
-                          {"A_nnz", L.A.nonZeros()},
-                          {"A_density", density(L.A)},
-                          {"B_nnz", L.B.nonZeros()},
-                          {"B_density", density(L.B)},
-                          {"Phi_bytes", storage_bytes(L.Phi)},
-                          {"Psi_bytes", storage_bytes(L.Psi)}});
+        levels.push_back(
+            {{"level", L.k},
+             {"cells", std::vector<int>(L.cells.data(), L.cells.data() + dim)},
+             {"nodes", grid_nodes(L.cells, dim)},
+             {"dofs", L.dofs.size()},
+             {"wavelets", L.W.rows()},
+             {"radius", std::isinf(L.radius) ? nlohmann::json("inf") : nlohmann::json(L.radius)},
+             {"build_seconds", L.build_seconds},
+             {"C_nnz", L.C_adapted.nonZeros()},
+             {"C_density", density(L.C_adapted)},
+             {"A_nnz", L.A.nonZeros()},
+             {"A_density", density(L.A)},
+             {"B_nnz", L.B.nonZeros()},
+             {"B_density", density(L.B)},
+             {"Phi_bytes", storage_bytes(L.Phi)},
+             {"Psi_bytes", storage_bytes(L.Psi)}});
     }
     m.report["levels"] = levels;
     m.report["fine_dofs"] = h.fine_dofs.size();
     return m;
 }
 
+CompareOptions parse_compare_options(const nlohmann::json& coarse, const std::string& source) {
+    CompareOptions o;
+    if (coarse.is_null()) return o;
+    const scene::JsonReader r(coarse, "coarse", source);
+    if (auto v = r.find("spectrum_max_dofs")) {
+        o.max_spectrum_dofs = v->integer();
+        v->fail_unless(o.max_spectrum_dofs >= 0, "expected an integer >= 0, got {}",
+                       o.max_spectrum_dofs);
+    }
+    if (auto v = r.find("cell_tensors")) {
+        v->fail_unless(v->json().is_boolean(), "expected true or false, got {}", v->json().dump());
+        o.cell_tensors = v->json().get<bool>();
+    }
+    return o;
+}
+
+coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
+                                       const nlohmann::json& build_levels,
+                                       const CompareOptions& options) {
+    const int q = h.num_levels();
+    const Diagnostics d = diagnose(h, fine.f, {options.max_spectrum_dofs, true});
+    coarsen::FineComparison c;
+    nlohmann::json levels = nlohmann::json::array();
+    for (int k = 1; k <= q; ++k) {
+        nlohmann::json entry =
+            k < q
+                ? build_levels.at(static_cast<std::size_t>(k - 1))
+                : nlohmann::json{
+                      {"level", q},
+                      {"cells", std::vector<int>(h.fine_cells.data(), h.fine_cells.data() + h.dim)},
+                      {"nodes", grid_nodes(h.fine_cells, h.dim)},
+                      {"A_nnz", h.A_fine.nonZeros()}};
+        entry.update(to_json(d.levels[static_cast<std::size_t>(k - 1)]));
+        levels.push_back(entry);
+        c.reconstructions.push_back({fmt::format("level_{}", k),
+                                     d.solutions[static_cast<std::size_t>(k - 1)],
+                                     fmt::format("/levels/{}", k - 1)});
+    }
+    c.report["levels"] = levels;
+    c.report["spectrum_max_dofs"] = options.max_spectrum_dofs;
+    c.files.push_back({"mra_levels.csv", to_csv(d)});
+    c.plots.push_back({"plot_mra.py",
+                       {"mra_errors.png", "mra_levels.csv", "--cond", "mra_condition.png"},
+                       {"mra_errors.png", "mra_condition.png"}});
+    add_coarsest_cells(h, fine, d.solutions.front(), d.solutions.back(), options.cell_tensors, c);
+    return c;
+}
+
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine) {
     const Options options = parse_options(scene.coarse, scene.source);
+    const CompareOptions compare = parse_compare_options(scene.coarse, scene.source);
     for (std::size_t k = 0; k < fine.bc.dofs.size(); ++k)
         CG_VERIFY_AS(InvalidScene, fine.bc.values[static_cast<Index>(k)] == 0.0,
                      "{}: dirichlet: the mra method supports only zero prescribed displacements, "
@@ -176,8 +340,14 @@ coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::
                      "but the grid has {} cells along axis {}",
                      scene.source, options.levels, options.levels - 1, factor,
                      fine.mesh.grid->cells[d], d);
-    const Hierarchy h = build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options);
-    return coarse_model(h, fine.f);
+    const auto h = std::make_shared<const Hierarchy>(
+        build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options));
+    coarsen::CoarseModel m = coarse_model(*h, fine.f);
+    m.compare_with_fine = [h, build_levels = m.report["levels"], compare](
+                              const scene::Scene&, const scene::FineModel& f, const Vector&) {
+        return compare_levels(*h, f, build_levels, compare);
+    };
+    return m;
 }
 
 }  // namespace coarsegrain::mra

@@ -39,7 +39,9 @@ class InverseOp {
 template <class Op>
 double largest_eigenvalue(Op& op, const char* what) {
     const Index n = op.rows();
-    const Index ncv = std::min<Index>(n, 20);
+    // 40 Lanczos vectors: 20 left the largest eigenvalue of a 15000-row B^1 (100x100 grid)
+    // unconverged after 1000 restarts.
+    const Index ncv = std::min<Index>(n, 40);
     Spectra::SymEigsSolver<Op> eigs(op, 1, ncv);
     eigs.init();
     eigs.compute(Spectra::SortRule::LargestAlge, 1000, 1e-12);
@@ -55,6 +57,24 @@ Vector restrict_to(const Vector& v, const IndexVector& dofs) {
     Vector r(dofs.size());
     for (Index i = 0; i < dofs.size(); ++i) r[i] = v[dofs[i]];
     return r;
+}
+
+/// Extreme eigenvalues of M, or NaN with L.spectrum_skipped set and the reason appended to
+/// L.spectrum_note if M has more than `limit` rows or Lanczos fails.
+Spectrum level_spectrum(const SparseMatrix& M, const char* name, Index limit, LevelDiagnostics& L) {
+    std::string reason;
+    if (M.rows() > limit) {
+        reason = fmt::format("{}: {} rows > max_spectrum_dofs {}", name, M.rows(), limit);
+    } else {
+        try {
+            return extreme_eigenvalues(M);
+        } catch (const Error& e) {
+            reason = fmt::format("{}: {}", name, e.what());
+        }
+    }
+    L.spectrum_skipped = true;
+    L.spectrum_note += (L.spectrum_note.empty() ? "" : "; ") + reason;
+    return {nan, nan};
 }
 
 }  // namespace
@@ -85,7 +105,7 @@ double sparsity(const SparseMatrix& M) {
     return 1.0 - static_cast<double>(nonzero) / size;
 }
 
-Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine) {
+Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOptions& options) {
     CG_VERIFY(g_fine.size() == h.fine_grid_dofs(),
               "mra diagnostics: load has {} entries, the fine grid {} DOFs", g_fine.size(),
               h.fine_grid_dofs());
@@ -93,7 +113,8 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine) {
     const double g_norm = restrict_to(g_fine, h.fine_dofs).norm();
     CG_VERIFY(g_norm > 0, "mra diagnostics: the load is zero on the hierarchy's DOFs");
     MultilevelSolver solver(h);
-    const Vector u = restrict_to(solver.solve_level(g_fine, q), h.fine_dofs);
+    const Vector u_grid = solver.solve_level(g_fine, q);
+    const Vector u = restrict_to(u_grid, h.fine_dofs);
     const double u_norm = energy_norm(h.A_fine, u);
     Diagnostics d;
     d.levels.resize(static_cast<std::size_t>(q));
@@ -102,10 +123,12 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine) {
         L.k = k;
         const SparseMatrix& A = k == q ? h.A_fine : h.level(k).A;
         L.dofs = A.rows();
-        const Vector e = restrict_to(solver.solve_level(g_fine, k), h.fine_dofs) - u;
+        Vector u_k = k == q ? u_grid : solver.solve_level(g_fine, k);
+        const Vector e = restrict_to(u_k, h.fine_dofs) - u;
         L.error_over_g = energy_norm(h.A_fine, e) / g_norm;
         L.error_over_u = energy_norm(h.A_fine, e) / u_norm;
-        const Spectrum sa = extreme_eigenvalues(A);
+        if (options.keep_solutions) d.solutions.push_back(std::move(u_k));
+        const Spectrum sa = level_spectrum(A, "A", options.max_spectrum_dofs, L);
         L.lambda_min_A = sa.lambda_min;
         L.lambda_max_A = sa.lambda_max;
         L.cond_A = sa.condition();
@@ -118,14 +141,12 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine) {
         }
         const Level& lev = h.level(k);
         L.wavelets = lev.B.rows();
-        if (L.wavelets > 0) {
-            const Spectrum sb = extreme_eigenvalues(lev.B);
-            L.lambda_min_B = sb.lambda_min;
-            L.lambda_max_B = sb.lambda_max;
-            L.cond_B = sb.condition();
-        } else {
-            L.lambda_min_B = L.lambda_max_B = L.cond_B = nan;
-        }
+        const Spectrum sb = L.wavelets > 0
+                                ? level_spectrum(lev.B, "B", options.max_spectrum_dofs, L)
+                                : Spectrum{nan, nan};
+        L.lambda_min_B = sb.lambda_min;
+        L.lambda_max_B = sb.lambda_max;
+        L.cond_B = sb.condition();
         L.sparsity_B = sparsity(lev.B);
         L.sparsity_C = sparsity(lev.C_adapted);
         L.bytes_Phi = storage_bytes(lev.Phi);
@@ -137,20 +158,52 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine) {
     return d;
 }
 
+std::string to_csv(const Diagnostics& d) {
+    std::string s =
+        "level,dofs,wavelets,error_over_g,error_over_u,lambda_min_A,lambda_max_A,cond_A,"
+        "lambda_min_B,lambda_max_B,cond_B,sparsity_A,sparsity_B,sparsity_C,bytes_Phi,"
+        "bytes_Psi,bytes_C,bytes_A,bytes_B,build_seconds,spectrum_skipped\n";
+    for (const LevelDiagnostics& L : d.levels)
+        s += fmt::format(
+            "{},{},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
+            "{:.17g},{:.17g},{},{},{},{},{},{:.17g},{:d}\n",
+            L.k, L.dofs, L.wavelets, L.error_over_g, L.error_over_u, L.lambda_min_A, L.lambda_max_A,
+            L.cond_A, L.lambda_min_B, L.lambda_max_B, L.cond_B, L.sparsity_A, L.sparsity_B,
+            L.sparsity_C, L.bytes_Phi, L.bytes_Psi, L.bytes_C, L.bytes_A, L.bytes_B,
+            L.build_seconds, static_cast<int>(L.spectrum_skipped));
+    return s;
+}
+
 void write_csv(const Diagnostics& d, const std::string& file) {
-    io::write_atomically(file, [&](std::ostream& os) {
-        os << "level,dofs,wavelets,error_over_g,error_over_u,lambda_min_A,lambda_max_A,cond_A,"
-              "lambda_min_B,lambda_max_B,cond_B,sparsity_A,sparsity_B,sparsity_C,bytes_Phi,"
-              "bytes_Psi,bytes_C,bytes_A,bytes_B,build_seconds\n";
-        for (const LevelDiagnostics& L : d.levels)
-            os << fmt::format(
-                "{},{},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
-                "{:.17g},{:.17g},{},{},{},{},{},{:.17g}\n",
-                L.k, L.dofs, L.wavelets, L.error_over_g, L.error_over_u, L.lambda_min_A,
-                L.lambda_max_A, L.cond_A, L.lambda_min_B, L.lambda_max_B, L.cond_B, L.sparsity_A,
-                L.sparsity_B, L.sparsity_C, L.bytes_Phi, L.bytes_Psi, L.bytes_C, L.bytes_A,
-                L.bytes_B, L.build_seconds);
-    });
+    io::write_atomically(file, [&](std::ostream& os) { os << to_csv(d); });
+}
+
+nlohmann::json to_json(const LevelDiagnostics& L) {
+    const auto number = [](double v) {
+        return std::isnan(v) ? nlohmann::json() : nlohmann::json(v);
+    };
+    return {{"level", L.k},
+            {"dofs", L.dofs},
+            {"wavelets", L.wavelets},
+            {"error_over_g", number(L.error_over_g)},
+            {"error_over_u", number(L.error_over_u)},
+            {"lambda_min_A", number(L.lambda_min_A)},
+            {"lambda_max_A", number(L.lambda_max_A)},
+            {"cond_A", number(L.cond_A)},
+            {"lambda_min_B", number(L.lambda_min_B)},
+            {"lambda_max_B", number(L.lambda_max_B)},
+            {"cond_B", number(L.cond_B)},
+            {"sparsity_A", number(L.sparsity_A)},
+            {"sparsity_B", number(L.sparsity_B)},
+            {"sparsity_C", number(L.sparsity_C)},
+            {"bytes_Phi", L.bytes_Phi},
+            {"bytes_Psi", L.bytes_Psi},
+            {"bytes_C", L.bytes_C},
+            {"bytes_A", L.bytes_A},
+            {"bytes_B", L.bytes_B},
+            {"build_seconds", L.build_seconds},
+            {"spectrum_skipped", L.spectrum_skipped},
+            {"spectrum_note", L.spectrum_note}};
 }
 
 }  // namespace coarsegrain::mra

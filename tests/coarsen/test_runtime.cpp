@@ -58,6 +58,7 @@ TEST(CoarseRuntime, FineModelAsItsOwnCoarseModelHasNoError) {
     EXPECT_LT(e.energy_rel, 1e-12);
     EXPECT_NEAR(e.compliance_ratio, 1.0, 1e-12);
     EXPECT_LT(e.max_displacement_rel, 1e-12);
+    EXPECT_LT(e.stress_rel, 1e-12);
 }
 
 TEST(CoarseRuntime, ErrorsOfAScaledSolutionAreExact) {
@@ -69,6 +70,7 @@ TEST(CoarseRuntime, ErrorsOfAScaledSolutionAreExact) {
     EXPECT_NEAR(e.energy_rel, 0.5, 1e-14);
     EXPECT_NEAR(e.max_displacement_rel, 0.5, 1e-14);
     EXPECT_NEAR(e.compliance_ratio, 0.5, 1e-14);
+    EXPECT_NEAR(e.stress_rel, 0.5, 1e-14);  // stress is linear in u
     // ||u||_K^2 = f.u at equilibrium (the conditions are homogeneous), so the paper's
     // normalisation by |f| is energy_rel * sqrt(f.u) / |f|.
     EXPECT_NEAR(e.energy_over_load, 0.5 * std::sqrt(fine.f.dot(u)) / fine.f.norm(), 1e-12);

@@ -53,7 +53,8 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         solve::SpdSolver solver;
         solver.compute(sys.K);
         const Vector u = m.to_fine * fem::expand(sys, solver.solve(sys.rhs), m.bc, 18);
-        const Hierarchy h = build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, parse_options(j["coarse"], "t"));
+        const Hierarchy h =
+            build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, parse_options(j["coarse"], "t"));
         MultilevelSolver ms(h);
         const Vector expected = ms.solve_level(fine.f, 1);
         // Two solves of the same 18-DOF system: round-off, 1e-12.
@@ -84,11 +85,11 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.truncation, 0.0);
     EXPECT_TRUE(d.invariance);
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
-    const Options o = parse_options(
-        json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
+    const Options o =
+        parse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
                         "radius_grid": "coarse", "truncation": 1e-7, "invariance": false,
                         "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
-        "t");
+                      "t");
     EXPECT_EQ(o.levels, 4);
     EXPECT_EQ(o.refinement, Refinement::Dirac);
     ASSERT_EQ(o.radius.size(), 3u);
@@ -117,6 +118,8 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
         {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
         {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},
         {R"({"dirichlet": "clamp"})", "coarse.dirichlet: expected \"constrain\""},
+        {R"({"spectrum_max_dofs": -1})", "coarse.spectrum_max_dofs: expected an integer >= 0"},
+        {R"({"cell_tensors": 1})", "coarse.cell_tensors: expected true or false"},
         {R"({"levels": 4})", "coarse.levels: 4 levels need cells per axis divisible by 2^3 = 8"},
     };
     for (const auto& c : cases) {

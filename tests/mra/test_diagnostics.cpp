@@ -141,7 +141,7 @@ std::string check_csvs(const test::GridProblem& p, int levels, const std::string
                 if (columns == 3) error = std::stod(cell);
                 ++columns;
             }
-            EXPECT_EQ(columns, 20);
+            EXPECT_EQ(columns, 21);
             ++rows;
             EXPECT_EQ(level, rows);
             if (rows <= static_cast<int>(d.levels.size())) {

@@ -3,6 +3,7 @@
 /// maps the fine model and the scene's "coarse" options to a CoarseModel; one runtime solves any
 /// CoarseModel and carries its solution to the fine mesh, so every comparison (the effective
 /// tensors, the material-adapted hierarchy, the naive/Voigt/Reuss baselines) is the same code.
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -23,6 +24,48 @@ struct VtuOutput {
     io::VtuFields fields;
 };
 
+/// A plain file a method adds to the output folder (e.g. a CSV table).
+struct FileOutput {
+    std::string file;  ///< name inside the output folder
+    std::string content;
+};
+
+/// A plot made by a Python script of the source tree's scripts/ folder, run in the output
+/// folder as `python3 scripts/<script> <args...>` after every other file is written. It needs
+/// Python 3 with matplotlib; without them the runtime notes on stderr how to make the plot and
+/// the run still succeeds.
+struct PlotOutput {
+    std::string script;              ///< file name inside scripts/, e.g. "plot_mra.py"
+    std::vector<std::string> args;   ///< arguments; file names are relative to the output folder
+    std::vector<std::string> files;  ///< the images the script writes (output folder names)
+};
+
+/// A fine displacement a method reconstructs besides its coarse solution (mra: the single-level
+/// solve of every level, Chen 2019 Sec. 4.1). The runtime treats it as the coarse solution:
+/// it writes solution_<name>.vtu (fields of solution_coarse.vtu) and compares it with the fine
+/// solution.
+struct Reconstruction {
+    std::string name;
+    Vector u;  ///< over all fine DOFs
+    /// JSON pointer into summary "coarse" (e.g. "/levels/0") of the object that receives this
+    /// reconstruction's "errors", "probes" and "vtu" (the file name).
+    std::string report_pointer;
+};
+
+/// What a method adds once the fine solution is known.
+struct FineComparison {
+    /// Merged into summary "coarse" as an RFC 7386 merge patch (its keys replace the model's).
+    nlohmann::json report = nlohmann::json::object();
+    std::vector<Reconstruction> reconstructions;
+    std::vector<VtuOutput> outputs;
+    std::vector<FileOutput> files;
+    std::vector<PlotOutput> plots;
+};
+
+/// Figures and files of a method that need the fine solution `u` (over all fine DOFs).
+using CompareWithFine = std::function<FineComparison(
+    const scene::Scene& scene, const scene::FineModel& fine, const Vector& u)>;
+
 /// A coarse model: an operator on coarse DOFs, its load and conditions, and the linear map that
 /// carries a coarse displacement to the fine nodes.
 struct CoarseModel {
@@ -37,6 +80,8 @@ struct CoarseModel {
     Timings timings;       ///< build phases; their sum is reported as coarse.timings.build
     nlohmann::json report = nlohmann::json::object();  ///< method figures for summary "coarse"
     std::vector<VtuOutput> outputs;                    ///< extra files for the output folder
+    /// Optional (empty: none): called once by the runtime after the fine and coarse solves.
+    CompareWithFine compare_with_fine;
 };
 
 }  // namespace coarsegrain::coarsen

@@ -27,6 +27,9 @@ struct Errors {
     double l2_rel = 0;                ///< |u_c - u|_2 / |u|_2 over the fine nodes
     double max_displacement_rel = 0;  ///< |max_i |u_c,i| - max_i |u_i|| / max_i |u_i|
     double compliance_ratio = 0;      ///< f.u_c / f.u: 1 is perfect, below 1 too stiff
+    /// Element stresses of u_c against those of u: ||σ_c - σ||_L2 / ||σ||_L2 (Frobenius norm,
+    /// element stresses weighted by element volume; Chen 2019 Fig. 16 compares the two fields).
+    double stress_rel = 0;
 };
 
 /// Compares u_c with u on the fine model (both full fine DOF vectors).

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "coarsegrain/coarsen/coarse_model.hpp"
+#include "coarsegrain/mra/diagnostics.hpp"
 #include "coarsegrain/mra/hierarchy.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
@@ -33,8 +34,50 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source);
 /// A and B, and storage bytes of Φ and Ψ; `timings` the phases of h.
 coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine);
 
+/// Options of compare_levels, read from the scene's "coarse" block (parse_compare_options).
+struct CompareOptions {
+    /// coarse.spectrum_max_dofs (integer >= 0): levels whose A^k or B^k has more rows get no
+    /// condition number. Each spectrum costs a factorization and tens of Lanczos solves:
+    /// measured 0.35 s for A of 20200 rows (2D 100x100 grid, 2 shared cores), more in 3D where
+    /// factorizations fill in.
+    Index max_spectrum_dofs = 20000;
+    /// coarse.cell_tensors (true | false): compute the Sec. 5.6 cell tensors. Each coarsest cell
+    /// gets its own free-body hierarchy, so a single coarsest cell costs a second full build.
+    bool cell_tensors = true;
+};
+
+/// @throws InvalidScene naming `coarse.<key>` and the source
+CompareOptions parse_compare_options(const nlohmann::json& coarse, const std::string& source);
+
+/// Cell tensors (cell_tensors.hpp) are computed only for coarsest grids of at most this many
+/// cells (one small free-body hierarchy each).
+inline constexpr Index kCellTensorsMaxCells = 1024;
+
+/// Figures of every level of `h` against the fine solution, for the summary of
+/// `coarsen --method mra`: mra::diagnose for the load fine.f with DiagnoseOptions
+/// {options.max_spectrum_dofs, keep_solutions}. The report's "levels" has q entries, level k at
+/// index k-1: `build_levels[k-1]` (the coarse_model report of level k; for level q its cells, nodes
+/// and the nonzeros of A^q) updated with to_json of the level's diagnostics; "spectrum_max_dofs"
+/// states the limit. Each level's single-level solve u^k = Φ^{k,T} (A^k)^{-1} g^k (Sec. 4.1)
+/// is a reconstruction "level_<k>" reported at "/levels/<k-1>"; the CSV is mra_levels.csv
+/// (write_csv) and scripts/plot_mra.py plots it to mra_errors.png (Fig. 9) and
+/// mra_condition.png (Fig. 8).
+///
+/// Sec. 5.6: coarsest_cells.vtu on the coarsest grid holds, per cell, the effective tensor
+/// "C_eff" (Voigt), the directional Young's modulus "E_x", "E_y" ("E_z"), "E_min", "E_max" and
+/// "E_directions" (at youngs_directions) of coarsest_cell_tensors (the same options as `h`), and
+/// the cell averages of the stress recovered on the fine mesh from the coarsest solve,
+/// "stress_coarse" = mean σ(u^1), and from the fine solve, "stress_fine" (physical components,
+/// as solution VTUs; Fig. 16). The report's "coarsest_cells" has the file, the cells, E_min and
+/// E_max over all cells and directions, and per cell "E_axes", "E_min", "E_max". Skipped (with
+/// "skipped" saying why) above kCellTensorsMaxCells cells or if !options.cell_tensors.
+coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
+                                       const nlohmann::json& build_levels,
+                                       const CompareOptions& options);
+
 /// Builds the hierarchy from scene.coarse options (parse_options) and returns the coarsest
-/// level as a CoarseModel (coarse_model).
+/// level as a CoarseModel (coarse_model) whose compare_with_fine is compare_levels with
+/// parse_compare_options (the hierarchy is kept alive by it).
 /// @throws InvalidScene for bad options or nonzero Dirichlet values; Error as build_hierarchy
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine);
 

@@ -3,6 +3,8 @@
 /// Sec. 5 as data: homogenization error (Fig. 9, Table 1), extreme eigenvalues and condition
 /// numbers of A^k and B^k (Figs. 7 and 8), sparsity and storage (Table 1), build time.
 #include <cstddef>
+#include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -19,18 +21,34 @@ struct LevelDiagnostics {
     /// Homogenization error of the single-level solve (Sec. 4.1): ||u^k - u||_A / ||g||_2 with
     /// u^k = Φ^{k,T} (A^k)^{-1} g^k, u the fine solution and A = A^q (the paper's Fig. 9 metric).
     double error_over_g = 0;
-    double error_over_u = 0;                                ///< ||u^k - u||_A / ||u||_A
-    double lambda_min_A = 0, lambda_max_A = 0, cond_A = 0;  ///< of A^k (Figs. 7, 8)
-    double lambda_min_B = 0, lambda_max_B = 0, cond_B = 0;  ///< of B^k (NaN at level q)
+    double error_over_u = 0;  ///< ||u^k - u||_A / ||u||_A
+    /// Extreme eigenvalues and condition numbers of A^k (Figs. 7, 8) and B^k (NaN at level q);
+    /// NaN also where skipped (spectrum_skipped).
+    double lambda_min_A = 0, lambda_max_A = 0, cond_A = 0;
+    double lambda_min_B = 0, lambda_max_B = 0, cond_B = 0;
     /// Fraction of zero entries (1 - stored nonzeros / (rows * cols)); explicitly stored zeros
     /// count as zeros. sparsity_C is of C̃^k (NaN at level q).
     double sparsity_A = 0, sparsity_B = 0, sparsity_C = 0;
     std::size_t bytes_Phi = 0, bytes_Psi = 0, bytes_C = 0, bytes_A = 0, bytes_B = 0;
     double build_seconds = 0;  ///< Level::build_seconds (0 at level q, which is not built)
+    /// The spectrum of A^k or B^k was not computed: more rows than max_spectrum_dofs, or
+    /// Lanczos did not converge (an optional figure never fails the diagnostics).
+    bool spectrum_skipped = false;
+    std::string spectrum_note;  ///< why, if skipped (not in the CSV)
 };
 
 struct Diagnostics {
     std::vector<LevelDiagnostics> levels;  ///< levels[k-1] is level k, k = 1..q
+    /// u^k = Φ^{k,T} (A^k)^{-1} g^k over all fine grid DOFs, solutions[k-1] for level k (u^q is
+    /// the fine solution); empty unless DiagnoseOptions::keep_solutions.
+    std::vector<Vector> solutions;
+};
+
+struct DiagnoseOptions {
+    /// Spectra of matrices with more rows are skipped (NaN): the smallest eigenvalue costs a
+    /// sparse factorization and tens of Lanczos solves with it.
+    Index max_spectrum_dofs = std::numeric_limits<Index>::max();
+    bool keep_solutions = false;  ///< fill Diagnostics::solutions
 };
 
 /// Extreme eigenvalues of a symmetric positive-definite sparse matrix.
@@ -50,10 +68,17 @@ double sparsity(const SparseMatrix& M);
 /// All figures of all levels for the load `g_fine` (over all fine grid DOFs, as
 /// MultilevelSolver::solve_level takes it).
 /// @throws Error if g_fine has the wrong size or is zero on the hierarchy's fine DOFs
-Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine);
+Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOptions& options = {});
 
-/// One row per level with a header row (column names as the LevelDiagnostics fields, NaN as
-/// "nan"), written atomically.
+/// One row per level with a header row (column names as the LevelDiagnostics fields in their
+/// order, spectrum_skipped last as 0/1; NaN as "nan").
+std::string to_csv(const Diagnostics& d);
+
+/// to_csv(d), written atomically.
 void write_csv(const Diagnostics& d, const std::string& file);
+
+/// The fields of one level as a JSON object (keys as the CSV columns plus spectrum_note; NaN
+/// becomes null).
+nlohmann::json to_json(const LevelDiagnostics& L);
 
 }  // namespace coarsegrain::mra

@@ -6,11 +6,10 @@
 /// are rejected so a typo never silently changes a simulation.
 #include <initializer_list>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
@@ -27,7 +26,7 @@ struct Box {
 
 /// A condition on the nodes or boundary facets inside a box.
 struct BoxCondition {
-    std::string key;        ///< JSON key for messages, e.g. "dirichlet[0]"
+    std::string key;  ///< JSON key for messages, e.g. "dirichlet[0]"
     Box box;
     Eigen::VectorXd value;  ///< prescribed displacement (dirichlet) or traction (force/area)
 };
@@ -36,7 +35,7 @@ struct BoxCondition {
 struct Scene {
     std::string source;  ///< file name (or "demo") for messages
     int dimension = 3;
-    mesh::Mesh mesh;     ///< material ids already set by the material field, if any
+    mesh::Mesh mesh;  ///< material ids already set by the material field, if any
     std::map<int, material::Material> materials;
     material::PlaneMode plane = material::PlaneMode::Strain;
     std::vector<BoxCondition> dirichlet;
@@ -55,8 +54,9 @@ struct Scene {
 
 /// Every key the "coarse" block may hold, over all methods.
 inline constexpr std::initializer_list<const char*> kCoarseKeys = {
-    "mesh",       "normals",    "boundary", "map",        "levels",    "refinement",
-    "radius",     "radius_grid", "truncation", "invariance", "dirichlet"};
+    "mesh",        "normals",     "boundary",   "map",        "levels",    "refinement",
+    "radius",      "radius_grid", "truncation", "invariance", "dirichlet", "spectrum_max_dofs",
+    "cell_tensors"};
 
 /// Reads and validates a scene file; relative file names inside are relative to its folder.
 /// @throws InvalidScene / MeshReadError / Error naming the file and key
@@ -70,8 +70,8 @@ struct FineModel {
     mesh::Mesh mesh;
     material::ElementMaterials materials;
     mesh::Boundary boundary;
-    SparseMatrix K;       ///< num_dofs square stiffness (no conditions applied)
-    Vector f;             ///< num_dofs load: gravity + traction
+    SparseMatrix K;  ///< num_dofs square stiffness (no conditions applied)
+    Vector f;        ///< num_dofs load: gravity + traction
     fem::Dirichlet bc;
 };
 
@@ -81,7 +81,7 @@ FineModel build_fine_model(const Scene& scene, Timings* timings = nullptr);
 
 /// The result of a static solve on the fine model.
 struct StaticSolution {
-    Vector u;               ///< num_dofs displacement, interleaved
+    Vector u;  ///< num_dofs displacement, interleaved
     double strain_energy = 0;
 };
 
