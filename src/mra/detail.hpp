@@ -32,9 +32,6 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
 /// Drops entries with |M_ij| < tau max_l |M_il| (row-relative).
 void truncate_rows(SparseMatrix& M, double tau);
 
-/// Drops off-diagonal entries with |A_ij| < tau sqrt(|A_ii A_jj|) (keeps A symmetric).
-void truncate_symmetric(SparseMatrix& A, double tau);
-
 /// Rigid motions of the finest grid on its present DOFs: dim translations, then the
 /// infinitesimal rotations about the origin (1 in 2D: u = (-y, x); 3 in 3D: u = omega x x), with
 /// positions in units of `unit` (#fine_dofs by dim + dim(dim-1)/2).

@@ -1,5 +1,4 @@
 #include <Eigen/SparseCholesky>
-
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -96,8 +95,8 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
         for (Index n = 0; n < num_nodes; ++n) {
             try {
                 // S: wavelets with a nonzero on a fine node of the region.
-                const Eigen::Vector3i c = 2 * node_coordinates(nodes[static_cast<std::size_t>(n)],
-                                                               g.coarse_cells, dim);
+                const Eigen::Vector3i c =
+                    2 * node_coordinates(nodes[static_cast<std::size_t>(n)], g.coarse_cells, dim);
                 const Eigen::Vector3i lo = (c.array() - rings).max(0);
                 const Eigen::Vector3i hi = (c.array() + rings).min(nf.array() - 1);
                 S.clear();
@@ -176,15 +175,6 @@ void truncate_rows(SparseMatrix& M, double tau) {
             row_max[it.row()] = std::max(row_max[it.row()], std::abs(it.value()));
     M.prune([&](Index i, Index, double v) { return std::abs(v) >= tau * row_max[i]; });
     M.makeCompressed();
-}
-
-void truncate_symmetric(SparseMatrix& A, double tau) {
-    if (tau <= 0) return;
-    const Vector d = A.diagonal().cwiseAbs();
-    A.prune([&](Index i, Index j, double v) {
-        return i == j || std::abs(v) >= tau * std::sqrt(d[i] * d[j]);
-    });
-    A.makeCompressed();
 }
 
 namespace {
