@@ -244,24 +244,25 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             L.B = symmetrized(product(L.W, AWt));
             R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
         }
-        SparseMatrix Z;
         const int rings = std::isinf(L.radius)
                               ? 0
                               : static_cast<int>(std::floor(L.radius)) *
                                     (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
         if (std::isinf(L.radius)) {
-            const Phase phase(tag + "Z (B factorize + solves)", &h.timings);
-            Z = detail::global_z(L.B, R);
+            const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
+            L.C_adapted =
+                detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation);
         } else {
-            const Phase phase(tag + "Z (localized solves)", &h.timings);
-            Z = detail::localized_z(L.B, R, L.W, g, rings);
-        }
-        {
+            SparseMatrix Z;
+            {
+                const Phase phase(tag + "Z (localized solves)", &h.timings);
+                Z = detail::localized_z(L.B, R, L.W, g, rings);
+            }
             const Phase phase(tag + "C adapted", &h.timings);
             L.C_adapted = L.C_dagger + product(Z, L.W);
             L.C_adapted.makeCompressed();
         }
-        Z = SparseMatrix();
+        R = SparseMatrix();
 
         // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node.
         const Index coarse_nodes = grid_nodes(L.cells, dim);
