@@ -183,29 +183,33 @@ TEST_P(MraLocalized, TruncationDropsSmallEntriesOnly) {
     const Eigen::Vector3d size = two_d ? Eigen::Vector3d(1, 1, 1) : Eigen::Vector3d(1, 2, 1);
     const test::GridProblem p =
         test::hung_problem(dim(), cells, 1.0, 100.0, test::checker_pattern, size);
-    Options o = test::exact_options(2, refinement());
-    o.radius = {3};
-    const Hierarchy h0 = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
-    o.truncation = 1e-3;
-    const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
-    const Level& L = h.level(1);
-    const Level& L0 = h0.level(1);
-    EXPECT_LT(L.C_adapted.nonZeros(), L0.C_adapted.nonZeros());
-    // Kept entries are at least tau times their row's largest; dropped ones were below it.
-    const Matrix C = Matrix(L.C_adapted), C0 = Matrix(L0.C_adapted);
-    for (Index i = 0; i < C.rows(); ++i) {
-        const double m = C0.row(i).cwiseAbs().maxCoeff();
-        for (Index j = 0; j < C.cols(); ++j) {
-            if (C(i, j) != 0.0)
-                EXPECT_EQ(C(i, j), C0(i, j));
-            else
-                EXPECT_LT(std::abs(C0(i, j)), 1e-3 * m);
+    // Localized solves (truncated after the solves) and global ones (truncated block by block
+    // as the solves run): the same rule.
+    for (const double radius : {3.0, std::numeric_limits<double>::infinity()}) {
+        Options o = test::exact_options(2, refinement());
+        o.radius = {radius};
+        const Hierarchy h0 = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+        o.truncation = 1e-3;
+        const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+        const Level& L = h.level(1);
+        const Level& L0 = h0.level(1);
+        EXPECT_LT(L.C_adapted.nonZeros(), L0.C_adapted.nonZeros()) << "radius " << radius;
+        // Kept entries are at least tau times their row's largest; dropped ones were below it.
+        const Matrix C = Matrix(L.C_adapted), C0 = Matrix(L0.C_adapted);
+        for (Index i = 0; i < C.rows(); ++i) {
+            const double m = C0.row(i).cwiseAbs().maxCoeff();
+            for (Index j = 0; j < C.cols(); ++j) {
+                if (C(i, j) != 0.0)
+                    EXPECT_EQ(C(i, j), C0(i, j));
+                else
+                    EXPECT_LT(std::abs(C0(i, j)), 1e-3 * m);
+            }
         }
+        // A^1 is not truncated: it is the Galerkin matrix of the truncated basis, C̃ A^2 C̃^T
+        // (round-off of the sparse products, 1e-12 relative).
+        const SparseMatrix A = L.C_adapted * h.A_fine * SparseMatrix(L.C_adapted.transpose());
+        EXPECT_LT((L.A - A).norm(), 1e-12 * A.norm()) << "radius " << radius;
     }
-    // A^1 is not truncated: it is the Galerkin matrix of the truncated basis, C̃ A^2 C̃^T
-    // (round-off of the sparse products, 1e-12 relative).
-    const SparseMatrix A = L.C_adapted * h.A_fine * SparseMatrix(L.C_adapted.transpose());
-    EXPECT_LT((L.A - A).norm(), 1e-12 * A.norm());
 }
 
 INSTANTIATE_TEST_SUITE_P(Mra, MraLocalized,
