@@ -41,8 +41,8 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
     }
     if (auto v = r.find("refinement")) {
         const std::string s = v->string();
-        v->fail_unless(s == "dirac" || s == "linear",
-                       "expected \"dirac\" or \"linear\", got \"{}\"", s);
+        v->fail_unless(s == "dirac" || s == "linear", "expected \"dirac\" or \"linear\", got \"{}\"",
+                       s);
         o.refinement = s == "dirac" ? Refinement::Dirac : Refinement::Linear;
     }
     if (auto v = r.find("radius")) {
@@ -119,8 +119,7 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
     m.f = P * coarse_grain(h, f_fine, 1);
     m.to_fine = SparseMatrix(L1.Phi.transpose()) * SparseMatrix(P.transpose());
     m.to_fine.makeCompressed();
-    std::vector<Index> dropped(L1.dropped_dofs.data(),
-                               L1.dropped_dofs.data() + L1.dropped_dofs.size());
+    std::vector<Index> dropped(L1.dropped_dofs.data(), L1.dropped_dofs.data() + L1.dropped_dofs.size());
     if (!dropped.empty()) {
         m.bc.dofs = dropped;
         m.bc.values = Vector::Zero(static_cast<Index>(dropped.size()));
@@ -129,8 +128,7 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
 
     const Options& o = h.options;
     nlohmann::json radius = nlohmann::json::array();
-    for (const double r : o.radius)
-        radius.push_back(std::isinf(r) ? nlohmann::json("inf") : nlohmann::json(r));
+    for (const double r : o.radius) radius.push_back(std::isinf(r) ? nlohmann::json("inf") : nlohmann::json(r));
     m.report["options"] = {{"levels", o.levels},
                            {"refinement", refinement_name(o.refinement)},
                            {"radius", radius},
@@ -140,22 +138,21 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
                            {"dirichlet", dirichlet_name(o.dirichlet)}};
     nlohmann::json levels = nlohmann::json::array();
     for (const Level& L : h.levels) {
-        levels.push_back(
-            {{"level", L.k},
-             {"cells", std::vector<int>(L.cells.data(), L.cells.data() + dim)},
-             {"nodes", grid_nodes(L.cells, dim)},
-             {"dofs", L.dofs.size()},
-             {"wavelets", L.W.rows()},
-             {"radius", std::isinf(L.radius) ? nlohmann::json("inf") : nlohmann::json(L.radius)},
-             {"build_seconds", L.build_seconds},
-             {"C_nnz", L.C_adapted.nonZeros()},
-             {"C_density", density(L.C_adapted)},
-             {"A_nnz", L.A.nonZeros()},
-             {"A_density", density(L.A)},
-             {"B_nnz", L.B.nonZeros()},
-             {"B_density", density(L.B)},
-             {"Phi_bytes", storage_bytes(L.Phi)},
-             {"Psi_bytes", storage_bytes(L.Psi)}});
+        levels.push_back({{"level", L.k},
+                          {"cells", std::vector<int>(L.cells.data(), L.cells.data() + dim)},
+                          {"nodes", grid_nodes(L.cells, dim)},
+                          {"dofs", L.dofs.size()},
+                          {"wavelets", L.W.rows()},
+                          {"radius", std::isinf(L.radius) ? nlohmann::json("inf") : nlohmann::json(L.radius)},
+                          {"build_seconds", L.build_seconds},
+                          {"C_nnz", L.C_adapted.nonZeros()},
+                          {"C_density", density(L.C_adapted)},
+                          {"A_nnz", L.A.nonZeros()},
+                          {"A_density", density(L.A)},
+                          {"B_nnz", L.B.nonZeros()},
+                          {"B_density", density(L.B)},
+                          {"Phi_bytes", storage_bytes(L.Phi)},
+                          {"Psi_bytes", storage_bytes(L.Psi)}});
     }
     m.report["levels"] = levels;
     m.report["fine_dofs"] = h.fine_dofs.size();

@@ -57,8 +57,8 @@ Vector MultilevelSolver::solve_level(const Vector& g_fine, int k) {
 }
 
 Vector expand_fine(const Hierarchy& h, const Vector& u_present) {
-    CG_VERIFY(u_present.size() == h.fine_dofs.size(), "mra: {} values for {} fine DOFs",
-              u_present.size(), h.fine_dofs.size());
+    CG_VERIFY(u_present.size() == h.fine_dofs.size(),
+              "mra: {} values for {} fine DOFs", u_present.size(), h.fine_dofs.size());
     Vector u = Vector::Zero(h.fine_grid_dofs());
     for (Index i = 0; i < h.fine_dofs.size(); ++i) u[h.fine_dofs[i]] = u_present[i];
     return u;
