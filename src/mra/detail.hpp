@@ -17,9 +17,13 @@ struct StepGeometry {
     IndexVector coarse_dofs;       ///< kept DOFs of level k (grid DOF indices, sorted)
 };
 
-/// Z of Algorithm 1 line 3 with global solves: B Z^T = -R, R = W A C^{†,T}, using one CHOLMOD
-/// factorization of B and blocks of columns of R. #coarse_dofs by #wavelets.
-SparseMatrix global_z(const SparseMatrix& B, const SparseMatrix& R);
+/// C̃ = C^† + Z W (Eq. 11) with Z from global solves (Algorithm 1 line 3: B Z^T = -R,
+/// R = W A C^{†,T}), one CHOLMOD factorization of B and blocks of columns of R, each block's rows
+/// of C̃ truncated (row-relative, as truncate_rows with tau; 0: none) before they are stored, so
+/// that neither Z nor C̃ is ever held densely. #coarse_dofs by #fine_dofs.
+SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix& R,
+                                       const SparseMatrix& C_dagger, const SparseMatrix& W,
+                                       double tau);
 
 /// Z with localized solves (Sec. 3.5 "Fast computation"): for each coarse node i, the region
 /// R_i holds the level-(k+1) nodes within `rings` grid rings (Chebyshev distance) of the node
@@ -31,9 +35,6 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
 
 /// Drops entries with |M_ij| < tau max_l |M_il| (row-relative).
 void truncate_rows(SparseMatrix& M, double tau);
-
-/// Drops off-diagonal entries with |A_ij| < tau sqrt(|A_ii A_jj|) (keeps A symmetric).
-void truncate_symmetric(SparseMatrix& A, double tau);
 
 /// Rigid motions of the finest grid on its present DOFs: dim translations, then the
 /// infinitesimal rotations about the origin (1 in 2D: u = (-y, x); 3 in 3D: u = omega x x), with

@@ -32,9 +32,11 @@ SparseMatrix principal_submatrix(const SparseMatrix& K, const IndexVector& keep)
 /// Operands denser than this (and small enough to hold densely) are multiplied as dense
 /// matrices: global solves make C̃, Φ and A dense, and Eigen's sparse-sparse product of dense
 /// operands is 20-50x slower than a dense product (measured on the 32x32 grid: 1.4 s vs 0.04 s
-/// for A^4 = C̃ A C̃^T).
+/// for A^4 = C̃ A C̃^T; on a 24x12x12 hex grid, two levels, C̃ 63% dense with 24M entries after
+/// global solves and truncation 1e-7: 41 s sparse, 31 s dense, on a loaded machine). Up to 6e7
+/// entries (480 MB per dense operand) are held densely.
 constexpr double kDenseProductDensity = 0.05;
-constexpr double kDenseProductMaxEntries = 2e7;
+constexpr double kDenseProductMaxEntries = 6e7;
 
 bool dense_enough(const SparseMatrix& M) {
     const double size = static_cast<double>(M.rows()) * static_cast<double>(M.cols());
@@ -100,8 +102,7 @@ std::string radius_grid_name(RadiusGrid g) { return g == RadiusGrid::Fine ? "fin
 Index Hierarchy::fine_grid_dofs() const { return dim * grid_nodes(fine_cells, dim); }
 
 const Level& Hierarchy::level(int k) const {
-    CG_VERIFY(k >= 1 && k < num_levels(), "mra: level {} out of range 1..{}", k,
-              num_levels() - 1);
+    CG_VERIFY(k >= 1 && k < num_levels(), "mra: level {} out of range 1..{}", k, num_levels() - 1);
     return levels[static_cast<std::size_t>(k - 1)];
 }
 
@@ -138,9 +139,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                   "mra: {} levels need cells per axis divisible by 2^{} = {}, but axis {} has {} "
                   "cells",
                   q, q - 1, 1 << (q - 1), d, cells[d]);
-    CG_VERIFY(grid_nodes(cells, dim) == mesh.num_nodes(),
-              "mra: the mesh has {} nodes, its grid {}", mesh.num_nodes(),
-              grid_nodes(cells, dim));
+    CG_VERIFY(grid_nodes(cells, dim) == mesh.num_nodes(), "mra: the mesh has {} nodes, its grid {}",
+              mesh.num_nodes(), grid_nodes(cells, dim));
     const Index n_dofs = mesh.num_dofs();
     CG_VERIFY(K.rows() == n_dofs && K.cols() == n_dofs, "mra: K is {}x{}, the mesh has {} DOFs",
               K.rows(), K.cols(), n_dofs);
@@ -175,7 +175,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         std::vector<Index> present;
         for (Index d = 0; d < n_dofs; ++d)
             if (penalize || !fixed[static_cast<std::size_t>(d)]) present.push_back(d);
-        h.fine_dofs = Eigen::Map<const IndexVector>(present.data(), static_cast<Index>(present.size()));
+        h.fine_dofs =
+            Eigen::Map<const IndexVector>(present.data(), static_cast<Index>(present.size()));
         if (penalize) {
             h.A_fine = K;
             for (const Index d : fixed_dofs)
@@ -245,24 +246,25 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             L.B = symmetrized(product(L.W, AWt));
             R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
         }
-        SparseMatrix Z;
-        const int rings =
-            std::isinf(L.radius) ? 0
-                                 : static_cast<int>(std::floor(L.radius)) *
-                                       (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
+        const int rings = std::isinf(L.radius)
+                              ? 0
+                              : static_cast<int>(std::floor(L.radius)) *
+                                    (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
         if (std::isinf(L.radius)) {
-            const Phase phase(tag + "Z (B factorize + solves)", &h.timings);
-            Z = detail::global_z(L.B, R);
+            const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
+            L.C_adapted =
+                detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation);
         } else {
-            const Phase phase(tag + "Z (localized solves)", &h.timings);
-            Z = detail::localized_z(L.B, R, L.W, g, rings);
-        }
-        {
+            SparseMatrix Z;
+            {
+                const Phase phase(tag + "Z (localized solves)", &h.timings);
+                Z = detail::localized_z(L.B, R, L.W, g, rings);
+            }
             const Phase phase(tag + "C adapted", &h.timings);
             L.C_adapted = L.C_dagger + product(Z, L.W);
             L.C_adapted.makeCompressed();
         }
-        Z = SparseMatrix();
+        R = SparseMatrix();
 
         // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node.
         const Index coarse_nodes = grid_nodes(L.cells, dim);
@@ -284,10 +286,11 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         if (options.invariance) {
             const Phase phase(tag + "invariance", &h.timings);
             // Skip fine nodes with an absent DOF, and (Sec. 3.5) those in the support of a
-            // coarse node on the Dirichlet boundary: within `reach` rings of it, the extent of
-            // a localized row of C̃ (the region R_i, plus one ring for the wavelets of the linear
-            // refinement; every node for global solves). This is geometric so that it also
-            // applies to eliminated boundary nodes, which have no row.
+            // coarse node on the Dirichlet boundary: the columns of C̃ with a nonzero in a row of
+            // such a node (the paper's rule, read off the pattern after the solves and the
+            // truncation). A boundary node whose DOFs were eliminated has no row: its support is
+            // taken as geometric, within `reach` rings (the region R_i, plus one ring for the
+            // wavelets of the linear refinement; every node for global solves).
             const Index fine_count = grid_nodes(fine_cells, dim);
             std::vector<char> skip(static_cast<std::size_t>(fine_count), 0);
             std::vector<int> present_count(static_cast<std::size_t>(fine_count), 0);
@@ -296,13 +299,22 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             for (Index j = 0; j < fine_count; ++j)
                 if (present_count[static_cast<std::size_t>(j)] != dim)
                     skip[static_cast<std::size_t>(j)] = 1;
+            for (Index l = 0; l < L.C_adapted.outerSize(); ++l)
+                for (SparseMatrix::InnerIterator it(L.C_adapted, l); it; ++it)
+                    if (L.dirichlet_nodes[static_cast<std::size_t>(L.dofs[it.row()] / dim)])
+                        skip[static_cast<std::size_t>(dofs_next[l] / dim)] = 1;
+            std::vector<int> kept_count(static_cast<std::size_t>(coarse_nodes), 0);
+            for (Index r = 0; r < L.dofs.size(); ++r)
+                ++kept_count[static_cast<std::size_t>(L.dofs[r] / dim)];
             const Eigen::Vector3i nf(fine_cells[0] + 1, fine_cells[1] + 1,
                                      dim == 3 ? fine_cells[2] + 1 : 1);
             const int reach = std::isinf(L.radius)
                                   ? nf.maxCoeff()
                                   : rings + (options.refinement == Refinement::Linear ? 1 : 0);
             for (Index i = 0; i < coarse_nodes; ++i) {
-                if (!L.dirichlet_nodes[static_cast<std::size_t>(i)]) continue;
+                if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
+                    kept_count[static_cast<std::size_t>(i)] == dim)
+                    continue;
                 const Eigen::Vector3i c = 2 * node_coordinates(i, L.cells, dim);
                 const Eigen::Vector3i lo = (c.array() - reach).max(0);
                 const Eigen::Vector3i hi = (c.array() + reach).min(nf.array() - 1);
@@ -329,7 +341,6 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         {
             const Phase phase(tag + "A", &h.timings);
             L.A = congruence(L.C_adapted, A);
-            detail::truncate_symmetric(L.A, options.truncation);
         }
         {
             const Phase phase(tag + "Phi Psi", &h.timings);
@@ -345,8 +356,9 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
 }
 
 Vector coarse_grain(const Hierarchy& h, const Vector& g_fine, int k) {
-    CG_VERIFY(g_fine.size() == h.fine_grid_dofs(), "mra: the fine vector has {} entries, expected {}",
-              g_fine.size(), h.fine_grid_dofs());
+    CG_VERIFY(g_fine.size() == h.fine_grid_dofs(),
+              "mra: the fine vector has {} entries, expected {}", g_fine.size(),
+              h.fine_grid_dofs());
     CG_VERIFY(k >= 1 && k <= h.num_levels(), "mra: level {} out of range 1..{}", k, h.num_levels());
     Vector g(h.fine_dofs.size());
     for (Index i = 0; i < h.fine_dofs.size(); ++i) g[i] = g_fine[h.fine_dofs[i]];

@@ -1,5 +1,4 @@
 #include <Eigen/SparseCholesky>
-
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -16,8 +15,8 @@ namespace {
 
 using Triplet = Eigen::Triplet<double, Index>;
 
-/// Columns of R solved per block in global_z: a block of the dense right-hand side is
-/// #wavelets x 64 doubles.
+/// Columns of R solved per block in global_adapted_refinement: a block of the dense right-hand side
+/// is #wavelets x 64 doubles.
 constexpr Index kGlobalBlock = 64;
 
 /// Loops shorter than these run on one thread: waking a second thread costs ~20 ms on a loaded
@@ -45,21 +44,33 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
 
 }  // namespace
 
-SparseMatrix global_z(const SparseMatrix& B, const SparseMatrix& R) {
+SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix& R,
+                                       const SparseMatrix& C_dagger, const SparseMatrix& W,
+                                       double tau) {
     solve::SpdSolver solver;
     solver.compute(B);
-    const Index nw = static_cast<Index>(R.rows()), nc = static_cast<Index>(R.cols());
+    const Index nc = static_cast<Index>(R.cols()), nf = static_cast<Index>(W.cols());
+    const SparseMatrix Wt = W.transpose();
+    const Eigen::SparseMatrix<double, Eigen::RowMajor, Index> Cd = C_dagger;
     std::vector<Triplet> t;
     for (Index c0 = 0; c0 < nc; c0 += kGlobalBlock) {
         const Index nb = std::min(kGlobalBlock, nc - c0);
-        const Matrix X = solver.solve(Matrix(R.middleCols(c0, nb)));
+        // Rows c0.. of C̃ = C^† + Z W with Z^T = -B^{-1} R, as columns: C^{†,T} - W^T B^{-1} R.
+        Matrix rows = -(Wt * solver.solve(Matrix(R.middleCols(c0, nb))));
         for (Index c = 0; c < nb; ++c)
-            for (Index w = 0; w < nw; ++w)
-                if (X(w, c) != 0.0) t.emplace_back(c0 + c, w, -X(w, c));
+            for (decltype(Cd)::InnerIterator it(Cd, c0 + c); it; ++it)
+                rows(it.col(), c) += it.value();
+        for (Index c = 0; c < nb; ++c) {
+            const double cut = tau * rows.col(c).cwiseAbs().maxCoeff();
+            for (Index f = 0; f < nf; ++f) {
+                const double v = rows(f, c);
+                if (v != 0.0 && std::abs(v) >= cut) t.emplace_back(c0 + c, f, v);
+            }
+        }
     }
-    SparseMatrix Z(nc, nw);
-    Z.setFromTriplets(t.begin(), t.end());
-    return Z;
+    SparseMatrix Ct(nc, nf);
+    Ct.setFromTriplets(t.begin(), t.end());
+    return Ct;
 }
 
 SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
@@ -96,8 +107,8 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
         for (Index n = 0; n < num_nodes; ++n) {
             try {
                 // S: wavelets with a nonzero on a fine node of the region.
-                const Eigen::Vector3i c = 2 * node_coordinates(nodes[static_cast<std::size_t>(n)],
-                                                               g.coarse_cells, dim);
+                const Eigen::Vector3i c =
+                    2 * node_coordinates(nodes[static_cast<std::size_t>(n)], g.coarse_cells, dim);
                 const Eigen::Vector3i lo = (c.array() - rings).max(0);
                 const Eigen::Vector3i hi = (c.array() + rings).min(nf.array() - 1);
                 S.clear();
@@ -176,15 +187,6 @@ void truncate_rows(SparseMatrix& M, double tau) {
             row_max[it.row()] = std::max(row_max[it.row()], std::abs(it.value()));
     M.prune([&](Index i, Index, double v) { return std::abs(v) >= tau * row_max[i]; });
     M.makeCompressed();
-}
-
-void truncate_symmetric(SparseMatrix& A, double tau) {
-    if (tau <= 0) return;
-    const Vector d = A.diagonal().cwiseAbs();
-    A.prune([&](Index i, Index j, double v) {
-        return i == j || std::abs(v) >= tau * std::sqrt(d[i] * d[j]);
-    });
-    A.makeCompressed();
 }
 
 namespace {

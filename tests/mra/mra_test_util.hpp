@@ -1,6 +1,5 @@
 #pragma once
 /// @file Grid problems shared by the material-adapted hierarchy tests.
-#include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>

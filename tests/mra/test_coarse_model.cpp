@@ -82,12 +82,12 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.refinement, Refinement::Linear);
     EXPECT_TRUE(std::isinf(d.radius.at(0)));
     EXPECT_EQ(d.radius_grid, RadiusGrid::Fine);
-    EXPECT_EQ(d.truncation, 0.0);
+    EXPECT_EQ(d.truncation, 1e-7);
     EXPECT_TRUE(d.invariance);
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
     const Options o =
         parse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
-                        "radius_grid": "coarse", "truncation": 1e-7, "invariance": false,
+                        "radius_grid": "coarse", "truncation": 1e-5, "invariance": false,
                         "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
                       "t");
     EXPECT_EQ(o.levels, 4);
@@ -97,7 +97,7 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_TRUE(std::isinf(o.radius[1]));
     EXPECT_EQ(o.radius[2], 3.5);
     EXPECT_EQ(o.radius_grid, RadiusGrid::Coarse);
-    EXPECT_EQ(o.truncation, 1e-7);
+    EXPECT_EQ(o.truncation, 1e-5);
     EXPECT_FALSE(o.invariance);
     EXPECT_EQ(o.dirichlet, DirichletTreatment::DiagonalPenalty);
 }

@@ -68,8 +68,8 @@ TEST_P(MraLocalized, ErrorDecreasesTowardsGlobalWithTheRadius) {
         const Level& L = h.level(1);
         MultilevelSolver s(h);
         const double e = test::energy_norm(p.K, s.solve_level(p.f, 1) - p.u);
-        std::printf("%dD %s radius %g: error %.4g (global %.4g), C nnz %ld (global %ld)\n",
-                    dim(), refinement_name(refinement()).c_str(), radius, e, e_global,
+        std::printf("%dD %s radius %g: error %.4g (global %.4g), C nnz %ld (global %ld)\n", dim(),
+                    refinement_name(refinement()).c_str(), radius, e, e_global,
                     static_cast<long>(L.C_adapted.nonZeros()),
                     static_cast<long>(hg.level(1).C_adapted.nonZeros()));
         EXPECT_LT(e, previous) << "radius " << radius;
@@ -164,10 +164,11 @@ TEST_P(MraLocalized, InvarianceCorrectionReproducesRigidMotionsAwayFromDirichlet
         }
         // Positions and motions are O(1); each step solves its constraints to round-off: 1e-10.
         EXPECT_LT(err, 1e-10) << "level " << k;
-        std::printf("%dD %s level %d: rigid motions exact at %ld of %ld fine DOFs (%.2g without "
-                    "the correction)\n",
-                    dim(), refinement_name(refinement()).c_str(), k, static_cast<long>(count),
-                    static_cast<long>(h.fine_dofs.size()), err0);
+        std::printf(
+            "%dD %s level %d: rigid motions exact at %ld of %ld fine DOFs (%.2g without "
+            "the correction)\n",
+            dim(), refinement_name(refinement()).c_str(), k, static_cast<long>(count),
+            static_cast<long>(h.fine_dofs.size()), err0);
         // The check is not vacuous: it covers a good part of the grid (the coarser the level,
         // the wider its basis functions and the more of them reach the clamped face), and
         // without the correction the same nodes are off by much more than round-off.
@@ -182,29 +183,33 @@ TEST_P(MraLocalized, TruncationDropsSmallEntriesOnly) {
     const Eigen::Vector3d size = two_d ? Eigen::Vector3d(1, 1, 1) : Eigen::Vector3d(1, 2, 1);
     const test::GridProblem p =
         test::hung_problem(dim(), cells, 1.0, 100.0, test::checker_pattern, size);
-    Options o = test::exact_options(2, refinement());
-    o.radius = {3};
-    const Hierarchy h0 = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
-    o.truncation = 1e-3;
-    const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
-    const Level& L = h.level(1);
-    const Level& L0 = h0.level(1);
-    EXPECT_LT(L.C_adapted.nonZeros(), L0.C_adapted.nonZeros());
-    // Kept entries are at least tau times their row's largest; dropped ones were below it.
-    const Matrix C = Matrix(L.C_adapted), C0 = Matrix(L0.C_adapted);
-    for (Index i = 0; i < C.rows(); ++i) {
-        const double m = C0.row(i).cwiseAbs().maxCoeff();
-        for (Index j = 0; j < C.cols(); ++j) {
-            if (C(i, j) != 0.0)
-                EXPECT_EQ(C(i, j), C0(i, j));
-            else
-                EXPECT_LT(std::abs(C0(i, j)), 1e-3 * m);
+    // Localized solves (truncated after the solves) and global ones (truncated block by block
+    // as the solves run): the same rule.
+    for (const double radius : {3.0, std::numeric_limits<double>::infinity()}) {
+        Options o = test::exact_options(2, refinement());
+        o.radius = {radius};
+        const Hierarchy h0 = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+        o.truncation = 1e-3;
+        const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+        const Level& L = h.level(1);
+        const Level& L0 = h0.level(1);
+        EXPECT_LT(L.C_adapted.nonZeros(), L0.C_adapted.nonZeros()) << "radius " << radius;
+        // Kept entries are at least tau times their row's largest; dropped ones were below it.
+        const Matrix C = Matrix(L.C_adapted), C0 = Matrix(L0.C_adapted);
+        for (Index i = 0; i < C.rows(); ++i) {
+            const double m = C0.row(i).cwiseAbs().maxCoeff();
+            for (Index j = 0; j < C.cols(); ++j) {
+                if (C(i, j) != 0.0)
+                    EXPECT_EQ(C(i, j), C0(i, j));
+                else
+                    EXPECT_LT(std::abs(C0(i, j)), 1e-3 * m);
+            }
         }
+        // A^1 is not truncated: it is the Galerkin matrix of the truncated basis, C̃ A^2 C̃^T
+        // (round-off of the sparse products, 1e-12 relative).
+        const SparseMatrix A = L.C_adapted * h.A_fine * SparseMatrix(L.C_adapted.transpose());
+        EXPECT_LT((L.A - A).norm(), 1e-12 * A.norm()) << "radius " << radius;
     }
-    const Vector d = L.A.diagonal();
-    for (Index j = 0; j < L.A.outerSize(); ++j)
-        for (SparseMatrix::InnerIterator it(L.A, j); it; ++it)
-            EXPECT_GE(std::abs(it.value()), 1e-3 * std::sqrt(d[it.row()] * d[j]));
 }
 
 INSTANTIATE_TEST_SUITE_P(Mra, MraLocalized,
@@ -212,6 +217,57 @@ INSTANTIATE_TEST_SUITE_P(Mra, MraLocalized,
                                             ::testing::Values(Refinement::Dirac,
                                                               Refinement::Linear)),
                          param_name);
+
+}  // namespace
+}  // namespace coarsegrain::mra
+
+namespace coarsegrain::mra {
+namespace {
+
+/// Vertical layers of thickness 1/8, stiff first (the Fig. 9 composite).
+int vertical_layers(const Eigen::VectorXd& x) {
+    return static_cast<int>(std::floor(8 * x[0])) % 2 == 0 ? 1 : 0;
+}
+
+double density(const SparseMatrix& M) {
+    return static_cast<double>(M.nonZeros()) /
+           (static_cast<double>(M.rows()) * static_cast<double>(M.cols()));
+}
+
+// The default Options (global solves, C̃ truncated at 1e-7, A^k the exact Galerkin matrix of the
+// truncated basis) against the exact construction (global solves, no truncation), three levels,
+// bilinear refinement: the coarsest-level energy error stays within 1.5x (the bound) on
+// the 64x64 hung bimaterial square (contrast 2000) and the 32x32 layered composite (E 100 vs
+// 5e6), while C̃ of the finest step loses at least a third of its entries. Measured: errors
+// 0.0048 (exact 0.0047) and 0.0349 (0.0349), densities of C̃ 0.25 and 0.33.
+TEST(MraDefaultsSlow, CoarsestErrorWithinOneAndAHalfOfTheExactConstruction) {
+    struct Case {
+        const char* name;
+        int cells;
+        double E_soft, E_stiff;
+        test::MaterialPattern pattern;
+    };
+    for (const Case& c : {Case{"hung square", 64, 1.0, 2000.0, test::checker_pattern},
+                          Case{"layered", 32, 100.0, 5e6, vertical_layers}}) {
+        const test::GridProblem p =
+            test::hung_problem(2, Eigen::Vector3i(c.cells, c.cells, 1), c.E_soft, c.E_stiff,
+                               c.pattern, Eigen::Vector3d::Ones(), false);
+        const double u_norm = test::energy_norm(p.K, p.u);
+        const auto coarsest = [&](const Options& o, double* dens) {
+            const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+            *dens = density(h.level(h.num_levels() - 1).C_adapted);
+            MultilevelSolver s(h);
+            return test::energy_norm(p.K, s.solve_level(p.f, 1) - p.u) / u_norm;
+        };
+        double dens_exact = 0, dens_default = 0;
+        const double e_exact = coarsest(test::exact_options(3, Refinement::Linear), &dens_exact);
+        const double e_default = coarsest(Options{}, &dens_default);
+        std::printf("%s: coarsest error %.4f (exact %.4f), density of C̃ %.3f (exact %.3f)\n",
+                    c.name, e_default, e_exact, dens_default, dens_exact);
+        EXPECT_LE(e_default, 1.5 * e_exact) << c.name;
+        EXPECT_LT(dens_default, 2.0 / 3.0 * dens_exact) << c.name;
+    }
+}
 
 }  // namespace
 }  // namespace coarsegrain::mra
