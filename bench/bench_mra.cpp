@@ -42,9 +42,10 @@ std::pair<double, double> factorize_and_solve(const cg::SparseMatrix& A, const c
 
 int main(int argc, char** argv) {
     if (argc < 4) {
-        std::fprintf(stderr,
-                     "usage: bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7] "
-                     "[radius_grid=fine|coarse]\n");
+        std::fprintf(
+            stderr,
+            "usage: bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7] "
+            "[radius_grid=fine|coarse]\n");
         return 2;
     }
     const Eigen::Vector3i cells(std::atoi(argv[1]), std::atoi(argv[2]), std::atoi(argv[3]));
