@@ -2,7 +2,8 @@
 // build time phase by phase, storage, and the coarsest factorize + solve against the fine
 // CHOLMOD factorize + solve of the same problem, measured in one run.
 //
-//   bench_mra NX NY NZ [levels=2] [radius=5|inf] [truncation=1e-7] [radius_grid=fine|coarse]
+//   bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7]
+//             [radius_grid=fine|coarse]
 //
 // The grid spans [0, NX/NY] x [0, 1] x [0, NZ/NY] (cubic cells), hung from its face y = 1 under
 // gravity and a traction on y = 0, with the checker inclusions of the hierarchy tests
@@ -41,16 +42,24 @@ std::pair<double, double> factorize_and_solve(const cg::SparseMatrix& A, const c
 
 int main(int argc, char** argv) {
     if (argc < 4) {
-        std::fprintf(stderr,
-                     "usage: bench_mra NX NY NZ [levels=2] [radius=5|inf] [truncation=1e-7] "
-                     "[radius_grid=fine|coarse]\n");
+        std::fprintf(
+            stderr,
+            "usage: bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7] "
+            "[radius_grid=fine|coarse]\n");
         return 2;
     }
     const Eigen::Vector3i cells(std::atoi(argv[1]), std::atoi(argv[2]), std::atoi(argv[3]));
     cg::mra::Options o;
     o.levels = argc > 4 ? std::atoi(argv[4]) : 2;
+    // Radius per step, comma-separated (entry k-1 builds level k), or one for every step.
     const std::string radius = argc > 5 ? argv[5] : "5";
-    o.radius = {radius == "inf" ? std::numeric_limits<double>::infinity() : std::atof(argv[5])};
+    o.radius.clear();
+    for (std::size_t a = 0; a <= radius.size();) {
+        const std::size_t b = std::min(radius.find(',', a), radius.size());
+        const std::string r = radius.substr(a, b - a);
+        o.radius.push_back(r == "inf" ? std::numeric_limits<double>::infinity() : std::stod(r));
+        a = b + 1;
+    }
     o.truncation = argc > 6 ? std::atof(argv[6]) : 1e-7;
     o.radius_grid = argc > 7 && std::string(argv[7]) == "coarse" ? cg::mra::RadiusGrid::Coarse
                                                                  : cg::mra::RadiusGrid::Fine;
