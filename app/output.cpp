@@ -9,19 +9,6 @@
 
 namespace coarsegrain::app {
 
-namespace {
-
-// Physical (not Mandel-scaled) tensor components for ParaView.
-Matrix mandel_to_physical(const Matrix& m) {
-    Matrix out = m;
-    const int n = static_cast<int>(m.cols());
-    const int first_shear = n == 6 ? 3 : 2;
-    out.rightCols(n - first_shear) *= kInvSqrt2;
-    return out;
-}
-
-}  // namespace
-
 double peak_rss_mb() {
     rusage r{};
     getrusage(RUSAGE_SELF, &r);
@@ -49,8 +36,8 @@ io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u) {
     Vector E(model.mesh.num_elements());
     for (Index e = 0; e < model.mesh.num_elements(); ++e) E[e] = model.materials.of(e).E;
     fields.add_cell_scalar("E", E);
-    fields.add_cell("stress", mandel_to_physical(stress.stress));
-    fields.add_cell("strain", mandel_to_physical(stress.strain));
+    fields.add_cell("stress", fem::mandel_to_physical(stress.stress));
+    fields.add_cell("strain", fem::mandel_to_physical(stress.strain));
     fields.add_cell_scalar("von_mises", stress.von_mises);
     return fields;
 }

@@ -75,4 +75,12 @@ double strain_energy(const SparseMatrix& K, const Vector& u) {
     return 0.5 * u.dot(K * u);
 }
 
+Matrix mandel_to_physical(const Matrix& m) {
+    Matrix out = m;
+    const int n = static_cast<int>(m.cols());
+    const int first_shear = n == 6 ? 3 : 2;
+    out.rightCols(n - first_shear) *= kInvSqrt2;
+    return out;
+}
+
 }  // namespace coarsegrain::fem

@@ -36,13 +36,6 @@ Index cell_count(const Eigen::Vector3i& cells, int dim) {
     return n;
 }
 
-/// Physical components (shear / √2) of Mandel rows.
-Matrix mandel_to_physical(Matrix m) {
-    const int first_shear = m.cols() == 6 ? 3 : 2;
-    m.rightCols(m.cols() - first_shear) *= kInvSqrt2;
-    return m;
-}
-
 /// Volume-weighted mean of the fine element stress of u over each coarsest cell (Mandel rows).
 Matrix cell_mean_stress(const scene::FineModel& fine, const Vector& u,
                         const Eigen::Vector3i& coarse_cells) {
@@ -117,8 +110,9 @@ void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const 
     out.fields.add_cell_scalar("E_min", E_dir.rowwise().minCoeff());
     out.fields.add_cell_scalar("E_max", E_dir.rowwise().maxCoeff());
     out.fields.add_cell("E_directions", E_dir);
-    out.fields.add_cell("stress_coarse", mandel_to_physical(cell_mean_stress(fine, u1, cells)));
-    out.fields.add_cell("stress_fine", mandel_to_physical(cell_mean_stress(fine, u, cells)));
+    out.fields.add_cell("stress_coarse",
+                        fem::mandel_to_physical(cell_mean_stress(fine, u1, cells)));
+    out.fields.add_cell("stress_fine", fem::mandel_to_physical(cell_mean_stress(fine, u, cells)));
     c.outputs.push_back(std::move(out));
     std::string csv = dim == 2 ? "cell,dx,dy,E\n" : "cell,dx,dy,dz,E\n";
     for (Index i = 0; i < nc; ++i)

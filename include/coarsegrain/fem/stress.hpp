@@ -19,6 +19,10 @@ struct ElementStress {
 ElementStress element_stress(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
                              const Vector& u);
 
+/// Rows of Mandel components (shear scaled by √2) as physical tensor components (shear / √2),
+/// as ParaView and users read them.
+Matrix mandel_to_physical(const Matrix& m);
+
 /// Strain energy 1/2 u^T K u.
 double strain_energy(const SparseMatrix& K, const Vector& u);
 
