@@ -10,9 +10,9 @@
 namespace coarsegrain::mra {
 namespace {
 
-using Param = std::tuple<int, Refinement, DirichletTreatment>;
+using GlobalParam = std::tuple<int, Refinement, DirichletTreatment>;
 
-class MraGlobal : public ::testing::TestWithParam<Param> {
+class MraGlobal : public ::testing::TestWithParam<GlobalParam> {
   protected:
     int dim() const { return std::get<0>(GetParam()); }
     Refinement refinement() const { return std::get<1>(GetParam()); }

@@ -11,13 +11,13 @@
 namespace coarsegrain::mra {
 namespace {
 
-using Param = std::tuple<int, Refinement>;
+using LocalizedParam = std::tuple<int, Refinement>;
 
-std::string param_name(const ::testing::TestParamInfo<Param>& p) {
+std::string param_name(const ::testing::TestParamInfo<LocalizedParam>& p) {
     return std::to_string(std::get<0>(p.param)) + "D_" + refinement_name(std::get<1>(p.param));
 }
 
-class MraLocalized : public ::testing::TestWithParam<Param> {
+class MraLocalized : public ::testing::TestWithParam<LocalizedParam> {
   protected:
     int dim() const { return std::get<0>(GetParam()); }
     Refinement refinement() const { return std::get<1>(GetParam()); }

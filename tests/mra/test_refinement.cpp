@@ -8,9 +8,9 @@
 namespace coarsegrain::mra {
 namespace {
 
-using Param = std::tuple<int, Refinement>;
+using RefinementParam = std::tuple<int, Refinement>;
 
-class MraRefinement : public ::testing::TestWithParam<Param> {
+class MraRefinement : public ::testing::TestWithParam<RefinementParam> {
   protected:
     int dim() const { return std::get<0>(GetParam()); }
     Refinement refinement() const { return std::get<1>(GetParam()); }
