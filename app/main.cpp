@@ -1,7 +1,9 @@
 // The coarsegrain command-line tool (DESIGN.md, "The command-line contract").
+#include <fmt/ranges.h>
 #include <omp.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <exception>
@@ -18,6 +20,37 @@ namespace {
 
 constexpr int kExitError = 1;  // bad input or a numerical failure
 constexpr int kExitUsage = 2;  // bad command line
+
+std::vector<std::string> split_methods(const std::string& list) {
+    std::vector<std::string> methods;
+    std::size_t start = 0;
+    for (std::size_t comma; (comma = list.find(',', start)) != std::string::npos; start = comma + 1)
+        methods.push_back(list.substr(start, comma - start));
+    methods.push_back(list.substr(start));
+    return methods;
+}
+
+/// --method's check: "all" or known method names separated by commas, each once.
+std::string check_methods(const std::string& list) {
+    if (list == "all") return {};
+    const std::vector<std::string>& known = cg::coarsen::method_names();
+    const std::vector<std::string> methods = split_methods(list);
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+        if (std::find(known.begin(), known.end(), methods[i]) == known.end())
+            return fmt::format(
+                "unknown method '{}': expected all or one or more of {} separated "
+                "by commas",
+                methods[i], fmt::join(known, ", "));
+        if (std::find(methods.begin(), methods.begin() + static_cast<std::ptrdiff_t>(i),
+                      methods[i]) != methods.begin() + static_cast<std::ptrdiff_t>(i))
+            return fmt::format("method '{}' is given twice", methods[i]);
+    }
+    return {};
+}
+
+std::vector<std::string> selected_methods(const cg::scene::Scene& scene, const std::string& list) {
+    return list == "all" ? cg::coarsen::configured_methods(scene) : split_methods(list);
+}
 
 }  // namespace
 
@@ -43,23 +76,30 @@ int main(int argc, char** argv) {
         "coarsen", "build a coarse model with one method and compare it with the fine solve");
     coarsen->add_option("scene", coarsen_scene, "scene file (JSON) with a \"coarse\" block")
         ->required();
-    coarsen->add_option("--method", method, "coarsening method")
-        ->check(CLI::IsMember(cg::coarsen::method_names()))
+    coarsen
+        ->add_option("--method", method,
+                     "coarsening method, several separated by commas, or all (every method the "
+                     "scene's coarse block configures)")
+        ->check(CLI::Validator(check_methods, "METHOD[,METHOD...]|all"))
         ->capture_default_str();
     coarsen->add_option("--out", coarsen_out, "output folder")->capture_default_str();
     coarsen->footer(
         "Methods: effective-tensor (Kharevych et al. 2009: one anisotropic tensor per element of\n"
         "coarse.mesh); naive, voigt, reuss (averages of the Lame parameters, tensors, compliances\n"
-        "over the same coarse mesh); mra (Chen et al. 2019).\n"
+        "over the same coarse mesh); mra (Chen et al. 2019), mra-linear and mra-dirac (mra with\n"
+        "coarse.refinement linear / dirac).\n"
         "effective-tensor reads coarse.mesh, coarse.normals (coarse|fine), coarse.boundary\n"
         "(neumann|mixed) and coarse.map (barycentric|harmonic); the averages read coarse.mesh.\n"
         "Files: summary.json, solution_fine.vtu, solution_coarse.vtu; with a coarse.mesh method\n"
         "also coarse_model.vtu (the coarse mesh with its tensors: a scene mesh that `coarsegrain\n"
         "solve` simulates without the fine mesh) and, for effective-tensor, harmonic.vtu.\n"
+        "Several methods compare them: DIR/<method>/ holds each one's files, and DIR/report.md\n"
+        "the table and pictures (as `coarsegrain demo`).\n"
         "See docs/guide.md, \"Coarsening\".");
     CLI::App* demo = app.add_subcommand(
         "demo",
-        "the built-in scene: a layered beam (stiff/soft, contrast 1000) hung under gravity");
+        "the built-in scene, a layered beam (stiff/soft, contrast 1000) hung under gravity: fine\n"
+        "solve, every coarsening method, a table and out/demo/report.md with pictures");
     demo->add_option("--out", demo_out, "output folder")->capture_default_str();
     demo->add_option("--scale", demo_scale, "grid resolution factor (1 = 64x16x16 hexes)")
         ->check(CLI::Range(0.05, 4.0))
@@ -87,13 +127,13 @@ int main(int argc, char** argv) {
             const cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
             const double read =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            cg::app::run_coarsen(sc, method, coarsen_out, read);
+            cg::app::run_coarsen(sc, selected_methods(sc, method), coarsen_out, "coarsen", read);
         } else if (*demo) {
             const cg::scene::Scene sc =
                 cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
             const double read =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            cg::app::run_solve(sc, demo_out, "demo", read);
+            cg::app::run_coarsen(sc, cg::coarsen::configured_methods(sc), demo_out, "demo", read);
         }
     } catch (const cg::Error& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

@@ -1,6 +1,5 @@
 #include "run_coarsen.hpp"
 
-#include <fmt/ranges.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -8,14 +7,16 @@
 #include <filesystem>
 
 #include "coarsegrain/coarsen/runtime.hpp"
-#include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/io/file_util.hpp"
 #include "output.hpp"
 #include "plots.hpp"
+#include "report.hpp"
 
 namespace coarsegrain::app {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 double sum(const Timings& t) {
     double s = 0;
@@ -32,22 +33,16 @@ nlohmann::json errors_json(const coarsen::Errors& e) {
             {"stress_rel", e.stress_rel}};
 }
 
-void print_table(const scene::Scene& sc, const std::string& method, const scene::FineModel& fine,
-                 const coarsen::CoarseModel& coarse, const Timings& tf, const Timings& tc,
-                 const coarsen::Errors& e) {
-    std::printf("coarsegrain coarsen --method %s: %s\n", method.c_str(), sc.source.c_str());
-    std::printf("  %-7s %9s %9s %9s %10s %10s %10s\n", "model", "nodes", "elements", "DOFs",
-                "build s", "factor s", "solve s");
-    std::printf("  %-7s %9d %9d %9d %10.3f %10.4f %10.4f\n", "fine", fine.mesh.num_nodes(),
-                fine.mesh.num_elements(), fine.mesh.num_dofs(), tf["assemble"], tf["factorize"],
-                tf["solve"]);
-    std::printf("  %-7s %9d %9d %9d %10.3f %10.4f %10.4f\n", "coarse", coarse.nodes,
-                coarse.elements, static_cast<Index>(coarse.K.rows()), sum(coarse.timings),
-                tc["factorize"], tc["solve"]);
-    std::printf("  speedup (factorize + solve) %.1fx\n",
-                (tf["factorize"] + tf["solve"]) / (tc["factorize"] + tc["solve"]));
-    std::printf("  errors: l2 %.4g, energy %.4g, max |u| %.4g, compliance ratio %.4f\n", e.l2_rel,
-                e.energy_rel, e.max_displacement_rel, e.compliance_ratio);
+FineRun solve_fine(const scene::Scene& sc, double read_seconds, const fs::path& dir) {
+    FineRun f;
+    f.timings.add("read", read_seconds);
+    f.model = scene::build_fine_model(sc, &f.timings);
+    f.solution = scene::solve_static(f.model, sc.solver, &f.timings);
+    f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
+    const Phase phase("write", &f.timings);
+    io::write_vtu((dir / "solution_fine.vtu").string(), f.model.mesh,
+                  solution_fields(f.model, f.solution.u));
+    return f;
 }
 
 // Solves the coarse model and adds its "factorize" and "solve" seconds to `timings`. A coarse
@@ -73,9 +68,8 @@ coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
 
 // Writes solution_<name>.vtu of a fine displacement u_c (fields as the fine solution's, plus its
 // error against u) and returns its summary figures: "errors", "probes" and "vtu".
-nlohmann::json write_solution(const std::filesystem::path& dir, const std::string& name,
-                              const scene::Scene& sc, const scene::FineModel& fine, const Vector& u,
-                              const Vector& u_c) {
+nlohmann::json write_solution(const fs::path& dir, const std::string& name, const scene::Scene& sc,
+                              const scene::FineModel& fine, const Vector& u, const Vector& u_c) {
     const std::string file = "solution_" + name + ".vtu";
     io::VtuFields fields = solution_fields(fine, u_c);
     fields.add_point_vector("error", u_c - u, fine.mesh.dim());
@@ -89,9 +83,8 @@ nlohmann::json write_solution(const std::filesystem::path& dir, const std::strin
 // merged into `coarse_json`, written to `dir`; plots are made last. Returns the plot images
 // made. The phase "compare" goes to `timings`.
 nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene::Scene& sc,
-                                 const scene::FineModel& fine, const Vector& u,
-                                 const std::filesystem::path& dir, nlohmann::json& coarse_json,
-                                 Timings& timings) {
+                                 const scene::FineModel& fine, const Vector& u, const fs::path& dir,
+                                 nlohmann::json& coarse_json, Timings& timings) {
     nlohmann::json made = nlohmann::json::array();
     if (!coarse.compare_with_fine) return made;
     const Phase phase("compare", &timings);
@@ -106,77 +99,160 @@ nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene
         io::write_atomically((dir / f.file).string(), [&](std::ostream& os) { os << f.content; });
     for (const coarsen::PlotOutput& p : c.plots)
         if (make_plot(dir.string(), p))
-            for (const std::string& f : p.files) made.push_back(f);
+            for (const std::string& file : p.files) made.push_back(file);
     return made;
 }
 
-}  // namespace
-
-void run_coarsen(const scene::Scene& sc, const std::string& method, const std::string& out_dir,
-                 double read_seconds) {
-    io::ensure_writable_dir(out_dir);
-    const std::filesystem::path dir(out_dir);
-    Timings tf;
-    tf.add("read", read_seconds);
-    const scene::FineModel fine = scene::build_fine_model(sc, &tf);
+/// Builds, solves and compares one method against the fine run; writes its files and its
+/// summary.json to `dir`. `fine_vtu` is the fine solution's file as seen from `dir`.
+MethodResult run_method(const scene::Scene& sc, const FineRun& f, const std::string& method,
+                        const fs::path& dir, const std::string& fine_vtu) {
+    const scene::FineModel& fine = f.model;
+    const Vector& u = f.solution.u;
+    const int dim = fine.mesh.dim();
     const coarsen::CoarseModel coarse = coarsen::build_coarse_model(sc, fine, method);
-    const scene::StaticSolution u = scene::solve_static(fine, sc.solver, &tf);
     Timings tc = coarse.timings;
     const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc.solver, tc);
-    const coarsen::Errors e = coarsen::compare(fine, u.u, uc.u_fine);
-
-    const std::vector<Eigen::VectorXd> probes_fine = scene::probe_displacements(sc, fine.mesh, u.u);
-    const std::vector<Eigen::VectorXd> probes =
-        scene::probe_displacements(sc, fine.mesh, uc.u_fine);
-    const int dim = fine.mesh.dim();
+    MethodResult r;
+    r.method = method;
+    r.errors = coarsen::compare(fine, u, uc.u_fine);
+    r.u_fine = uc.u_fine;
     {
         const Phase phase("write", &tc);
-        io::write_vtu((dir / "solution_fine.vtu").string(), fine.mesh, solution_fields(fine, u.u));
         io::VtuFields fields = solution_fields(fine, uc.u_fine);
-        fields.add_point_vector("error", uc.u_fine - u.u, dim);
+        fields.add_point_vector("error", uc.u_fine - u, dim);
         io::write_vtu((dir / "solution_coarse.vtu").string(), fine.mesh, fields);
         for (const coarsen::VtuOutput& o : coarse.outputs)
             io::write_vtu((dir / o.file).string(), o.mesh, o.fields);
     }
-
-    nlohmann::json fine_json = fine_sizes(fine);
-    fine_json["timings"] = timings_json(tf);
     nlohmann::json coarse_json = coarse.report;
-    const nlohmann::json plots = compare_with_fine(coarse, sc, fine, u.u, dir, coarse_json, tc);
+    const nlohmann::json plots = compare_with_fine(coarse, sc, fine, u, dir, coarse_json, tc);
+    r.dofs = coarse.K.rows();
+    r.build_seconds = sum(coarse.timings);
+    r.factorize_and_solve = tc["factorize"] + tc["solve"];
+    r.speedup = f.factorize_and_solve() / r.factorize_and_solve;
     coarse_json["nodes"] = coarse.nodes;
     coarse_json["elements"] = coarse.elements;
     coarse_json["dofs"] = coarse.K.rows();
     coarse_json["free_dofs"] = coarse.K.rows() - static_cast<Index>(coarse.bc.dofs.size());
     coarse_json["nonzeros"] = coarse.K.nonZeros();
     coarse_json["timings"] = timings_json(tc);
-    coarse_json["timings"]["build"] = sum(coarse.timings);
-    const double fine_fs = tf["factorize"] + tf["solve"], coarse_fs = tc["factorize"] + tc["solve"];
-    write_summary(
-        out_dir,
-        {
-            {"command", "coarsen"},
-            {"method", method},
-            {"scene", sc.source},
-            {"fine", fine_json},
-            {"coarse", coarse_json},
-            {"solver", solve::backend_name(sc.solver.backend)},
-            {"threads", omp_get_max_threads()},
-            {"probes", probes_json(sc, probes, &probes_fine)},
-            {"errors", errors_json(e)},
-            {"speedup",
-             {{"solve", tf["solve"] / tc["solve"]}, {"factorize_and_solve", fine_fs / coarse_fs}}},
-            {"max_displacement", nodal_magnitude(uc.u_fine, dim).maxCoeff()},
-            {"strain_energy", 0.5 * uc.u.dot(coarse.K * uc.u)},
-            {"compliance", coarse.f.dot(uc.u)},
-            {"fine_max_displacement", nodal_magnitude(u.u, dim).maxCoeff()},
-            {"fine_strain_energy", u.strain_energy},
-            {"plots", plots},
-            {"peak_memory_mb", peak_rss_mb()},
-        });
-    print_table(sc, method, fine, coarse, tf, tc, e);
+    coarse_json["timings"]["build"] = r.build_seconds;
+    nlohmann::json fine_json = fine_sizes(fine);
+    fine_json["timings"] = timings_json(f.timings);
+    r.summary = {
+        {"command", "coarsen"},
+        {"method", method},
+        {"scene", sc.source},
+        {"fine", fine_json},
+        {"coarse", coarse_json},
+        {"solver", solve::backend_name(sc.solver.backend)},
+        {"threads", omp_get_max_threads()},
+        {"probes",
+         probes_json(sc, scene::probe_displacements(sc, fine.mesh, uc.u_fine), &f.probes)},
+        {"errors", errors_json(r.errors)},
+        {"speedup",
+         {{"solve", f.timings["solve"] / tc["solve"]}, {"factorize_and_solve", r.speedup}}},
+        {"max_displacement", nodal_magnitude(uc.u_fine, dim).maxCoeff()},
+        {"strain_energy", 0.5 * uc.u.dot(coarse.K * uc.u)},
+        {"compliance", coarse.f.dot(uc.u)},
+        {"fine_max_displacement", nodal_magnitude(u, dim).maxCoeff()},
+        {"fine_strain_energy", f.solution.strain_energy},
+        {"fine_vtu", fine_vtu},
+        {"plots", plots},
+        {"peak_memory_mb", peak_rss_mb()},
+    };
+    write_summary(dir.string(), r.summary);
+    return r;
+}
+
+void print_method_table(const scene::Scene& sc, const std::string& method, const FineRun& f,
+                        const MethodResult& r) {
+    const scene::FineModel& fine = f.model;
+    const nlohmann::json& c = r.summary["coarse"];
+    const Timings& tf = f.timings;
+    std::printf("coarsegrain coarsen --method %s: %s\n", method.c_str(), sc.source.c_str());
+    std::printf("  %-7s %9s %9s %9s %10s %10s %10s\n", "model", "nodes", "elements", "DOFs",
+                "build s", "factor s", "solve s");
+    std::printf("  %-7s %9d %9d %9d %10.3f %10.4f %10.4f\n", "fine", fine.mesh.num_nodes(),
+                fine.mesh.num_elements(), fine.mesh.num_dofs(), tf["assemble"], tf["factorize"],
+                tf["solve"]);
+    std::printf("  %-7s %9d %9d %9d %10.3f %10.4f %10.4f\n", "coarse", c["nodes"].get<Index>(),
+                c["elements"].get<Index>(), r.dofs, r.build_seconds,
+                c["timings"]["factorize"].get<double>(), c["timings"]["solve"].get<double>());
+    std::printf("  speedup (factorize + solve) %.1fx\n", r.speedup);
+    std::printf("  errors: l2 %.4g, energy %.4g, max |u| %.4g, compliance ratio %.4f\n",
+                r.errors.l2_rel, r.errors.energy_rel, r.errors.max_displacement_rel,
+                r.errors.compliance_ratio);
+}
+
+void run_one(const scene::Scene& sc, const std::string& method, const fs::path& dir,
+             double read_seconds) {
+    const FineRun f = solve_fine(sc, read_seconds, dir);
+    const MethodResult r = run_method(sc, f, method, dir, "solution_fine.vtu");
+    print_method_table(sc, method, f, r);
     std::printf(
-        "  wrote %s/summary.json, solution_fine.vtu, solution_coarse.vtu%s (peak memory %.0f MB)\n",
-        out_dir.c_str(), coarse.outputs.empty() ? "" : ", method files", peak_rss_mb());
+        "  wrote %s/summary.json, solution_fine.vtu, solution_coarse.vtu and the method's "
+        "files (peak memory %.0f MB)\n",
+        dir.c_str(), peak_rss_mb());
+}
+
+void run_comparison(const scene::Scene& sc, const std::vector<std::string>& methods,
+                    const fs::path& dir, const std::string& command, double read_seconds) {
+    const FineRun f = solve_fine(sc, read_seconds, dir);
+    std::vector<MethodResult> results;
+    for (const std::string& method : methods) {
+        const fs::path sub = dir / method;
+        io::ensure_writable_dir(sub.string());
+        results.push_back(run_method(sc, f, method, sub, "../solution_fine.vtu"));
+    }
+    const nlohmann::json plots = write_report(sc, command, f, results, dir);
+    nlohmann::json fine_json = fine_sizes(f.model);
+    fine_json["timings"] = timings_json(f.timings);
+    nlohmann::json rows = nlohmann::json::array();
+    for (const MethodResult& r : results)
+        rows.push_back(
+            {{"method", r.method},
+             {"folder", r.method},
+             {"coarse",
+              {{"dofs", r.dofs},
+               {"timings",
+                {{"build", r.build_seconds}, {"factorize_and_solve", r.factorize_and_solve}}}}},
+             {"errors", errors_json(r.errors)},
+             {"speedup", {{"factorize_and_solve", r.speedup}}},
+             {"max_displacement", r.summary["max_displacement"]}});
+    write_summary(dir.string(), {
+                                    {"command", command},
+                                    {"scene", sc.source},
+                                    {"fine", fine_json},
+                                    {"solver", solve::backend_name(sc.solver.backend)},
+                                    {"threads", omp_get_max_threads()},
+                                    {"probes", probes_json(sc, f.probes)},
+                                    {"max_displacement",
+                                     nodal_magnitude(f.solution.u, f.model.mesh.dim()).maxCoeff()},
+                                    {"strain_energy", f.solution.strain_energy},
+                                    {"compliance", f.model.f.dot(f.solution.u)},
+                                    {"methods", rows},
+                                    {"report", "report.md"},
+                                    {"plots", plots},
+                                    {"peak_memory_mb", peak_rss_mb()},
+                                });
+    print_comparison_table(sc, command, f, results);
+    std::printf(
+        "  wrote %s/report.md, summary.json, solution_fine.vtu and a folder per method "
+        "(peak memory %.0f MB)\n",
+        dir.c_str(), peak_rss_mb());
+}
+
+}  // namespace
+
+void run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
+                 const std::string& out_dir, const std::string& command, double read_seconds) {
+    io::ensure_writable_dir(out_dir);
+    if (methods.size() == 1)
+        run_one(sc, methods.front(), out_dir, read_seconds);
+    else
+        run_comparison(sc, methods, out_dir, command, read_seconds);
 }
 
 }  // namespace coarsegrain::app

@@ -5,7 +5,7 @@ Usage: /usr/bin/python3 scripts/plot_mra.py OUT.png A.csv [B.csv ...] [--cond CO
 
 Each CSV is written by coarsegrain::mra::write_csv (one row per level). OUT.png gets the
 homogenization error ||u^k - u||_A / ||g||_2 against the level (log y, Fig. 9), one line per
-CSV labelled by its file name; --cond additionally writes cond(A^k) and cond(B^k) (Fig. 8).
+CSV labelled by its file name (by its folder's name if several files share one); --cond additionally writes cond(A^k) and cond(B^k) (Fig. 8).
 """
 import os
 import sys
@@ -40,6 +40,15 @@ def read_csv(path):
     return {name: data[:, i] for i, name in enumerate(header)}
 
 
+def csv_label(path, paths):
+    """The file name without extension, or its folder's name if several files share it."""
+    names = [os.path.splitext(os.path.basename(p))[0] for p in paths]
+    name = os.path.splitext(os.path.basename(path))[0]
+    if names.count(name) > 1:
+        return os.path.basename(os.path.dirname(os.path.abspath(path)))
+    return name
+
+
 def main(argv):
     args = list(argv)
     cond_png = None
@@ -52,7 +61,7 @@ def main(argv):
     if len(args) < 2:
         sys.exit(__doc__)
     out, csvs = args[0], args[1:]
-    tables = [(os.path.splitext(os.path.basename(p))[0], read_csv(p)) for p in csvs]
+    tables = [(csv_label(p, csvs), read_csv(p)) for p in csvs]
 
     # Imported only once the input is known to be good: a bad CSV fails fast.
     import matplotlib

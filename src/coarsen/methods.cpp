@@ -10,9 +10,23 @@
 namespace coarsegrain::coarsen {
 
 const std::vector<std::string>& method_names() {
-    static const std::vector<std::string> names = {"effective-tensor", "naive", "voigt", "reuss",
-                                                   "mra"};
+    static const std::vector<std::string> names = {
+        "effective-tensor", "naive", "voigt", "reuss", "mra", "mra-linear", "mra-dirac"};
     return names;
+}
+
+std::vector<std::string> configured_methods(const scene::Scene& scene) {
+    std::vector<std::string> methods;
+    if (scene.coarse_mesh) methods = {"effective-tensor", "naive", "voigt", "reuss"};
+    if (scene.coarse.is_object() && scene.coarse.contains("levels")) {
+        methods.push_back("mra-linear");
+        methods.push_back("mra-dirac");
+    }
+    CG_VERIFY(!methods.empty(),
+              "{}: the \"coarse\" block configures no method: expected coarse.mesh "
+              "(effective-tensor, naive, voigt, reuss) or coarse.levels (mra)",
+              scene.source);
+    return methods;
 }
 
 CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
@@ -20,8 +34,16 @@ CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel
     CG_VERIFY(
         std::find(method_names().begin(), method_names().end(), method) != method_names().end(),
         "unknown method '{}': expected one of {}", method, fmt::join(method_names(), ", "));
-    CoarseModel m = method == "mra" ? mra::build_coarse_model(scene, fine)
-                                    : homogenize::build_coarse_model(scene, fine, method);
+    CoarseModel m;
+    if (method == "mra") {
+        m = mra::build_coarse_model(scene, fine);
+    } else if (method.starts_with("mra-")) {
+        scene::Scene with_refinement = scene;
+        with_refinement.coarse["refinement"] = method.substr(4);
+        m = mra::build_coarse_model(with_refinement, fine);
+    } else {
+        m = homogenize::build_coarse_model(scene, fine, method);
+    }
     m.method = method;
     return m;
 }

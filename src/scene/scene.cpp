@@ -89,14 +89,17 @@ material::Material parse_material(const JsonReader& r, int dim, material::PlaneM
     r.fail_unless(iso != (tensors == 1) && tensors <= 1,
                   "give either \"E\" and \"nu\" (isotropic) or one of \"C_voigt\" / \"C_mandel\"");
     try {
-        if (iso) return material::isotropic(dim, r.at("E").number(), r.at("nu").number(), density, plane);
+        if (iso)
+            return material::isotropic(dim, r.at("E").number(), r.at("nu").number(), density,
+                                       plane);
         const bool voigt = r.has("C_voigt");
         const JsonReader c = r.at(voigt ? "C_voigt" : "C_mandel");
         const int n = mandel_size(dim);
         c.fail_unless(c.array_size() == static_cast<std::size_t>(n),
                       "expected a {}x{} matrix (rows of numbers)", n, n);
         Matrix C(n, n);
-        for (int i = 0; i < n; ++i) C.row(i) = c.at(static_cast<std::size_t>(i)).vector(n).transpose();
+        for (int i = 0; i < n; ++i)
+            C.row(i) = c.at(static_cast<std::size_t>(i)).vector(n).transpose();
         return material::anisotropic(dim, voigt ? material::voigt_to_mandel(C) : C, density);
     } catch (const InvalidScene&) {
         throw;
@@ -150,8 +153,8 @@ std::map<int, material::Material> apply_material_field(const JsonReader& r, mesh
         c->allow_only({"origin", "size", "ids"});
         const std::vector<int> ids = parse_ids(c->at("ids"));
         c->at("ids").fail_unless(ids.size() == 2, "expected two material ids");
-        const Eigen::VectorXd origin =
-            c->has("origin") ? c->at("origin").vector(dim) : Eigen::VectorXd(box.row(0).transpose());
+        const Eigen::VectorXd origin = c->has("origin") ? c->at("origin").vector(dim)
+                                                        : Eigen::VectorXd(box.row(0).transpose());
         material::checkerboard(m, origin, c->at("size").positive(), ids[0], ids[1]);
     } else if (auto im = r.find("image")) {
         im->allow_only({"file", "E_black", "E_white", "nu", "density"});
@@ -191,8 +194,8 @@ std::vector<BoxCondition> parse_box_conditions(const JsonReader& r, int dim, boo
         bc.box.min = b.at("min").vector(dim);
         bc.box.max = b.at("max").vector(dim);
         for (int d = 0; d < dim; ++d)
-            b.fail_unless(bc.box.max[d] >= bc.box.min[d], "max[{}] = {} is below min[{}] = {}",
-                          d, bc.box.max[d], d, bc.box.min[d]);
+            b.fail_unless(bc.box.max[d] >= bc.box.min[d], "max[{}] = {} is below min[{}] = {}", d,
+                          bc.box.max[d], d, bc.box.min[d]);
         bc.value = value_required || c.has("value") ? c.at("value").vector(dim)
                                                     : Eigen::VectorXd::Zero(dim);
         out.push_back(bc);
@@ -223,8 +226,8 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     std::map<int, material::Material> carried;
     s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir, &carried);
     s.dimension = s.mesh.dim();
-    root.fail_unless(!dimension || *dimension == s.dimension,
-                     "dimension is {} but the mesh is {}D", dimension.value_or(0), s.dimension);
+    root.fail_unless(!dimension || *dimension == s.dimension, "dimension is {} but the mesh is {}D",
+                     dimension.value_or(0), s.dimension);
     const int dim = s.dimension;
 
     if (!carried.empty()) {
@@ -317,7 +320,8 @@ FineModel build_fine_model(const Scene& scene, Timings* timings) {
         }
         m.K = fem::stiffness_matrix(m.mesh, m.materials);
         m.f = Vector::Zero(m.mesh.num_dofs());
-        if (scene.gravity.squaredNorm() > 0) m.f += fem::gravity_load(m.mesh, m.materials, scene.gravity);
+        if (scene.gravity.squaredNorm() > 0)
+            m.f += fem::gravity_load(m.mesh, m.materials, scene.gravity);
         for (const BoxCondition& c : scene.traction) {
             const std::vector<Index> facets =
                 mesh::facets_in_box(m.mesh, m.boundary, c.box.min, c.box.max);
@@ -363,15 +367,19 @@ std::vector<Eigen::VectorXd> probe_displacements(const Scene& scene, const mesh:
 }
 
 json demo_scene(double scale) {
-    const int nx = std::max(4, static_cast<int>(64 * scale));
-    const int ny = std::max(2, static_cast<int>(16 * scale));
+    // Multiples of 4 cells, so that the 3-level hierarchy's coarsest grid is whole.
+    const int nx = std::max(4, 4 * static_cast<int>(16 * scale));
+    const int ny = std::max(4, 4 * static_cast<int>(4 * scale));
     return json{
         {"description",
          "Accordion beam: a 4x1x1 block of alternating stiff (E = 1e5) and soft (E = 1e2) "
-         "layers across its axis, clamped at x = 0 and hanging under gravity."},
+         "layers across its axis, clamped at x = 0 and hanging under gravity. Coarse: a tet grid "
+         "of 8x4x4 cells (6 tets each) for the effective tensors and the baselines; 3 levels of "
+         "the material-adapted hierarchy (coarsest grid 4x coarser per axis)."},
         {"dimension", 3},
-        {"mesh", {{"grid", {{"min", {0, 0, 0}}, {"max", {4, 1, 1}}, {"cells", {nx, ny, ny}},
-                            {"element", "hex"}}}}},
+        {"mesh",
+         {{"grid",
+           {{"min", {0, 0, 0}}, {"max", {4, 1, 1}}, {"cells", {nx, ny, ny}}, {"element", "hex"}}}}},
         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.25}, {"ids", {1, 2}}}}}},
         {"materials",
          {{"1", {{"E", 1e5}, {"nu", 0.3}, {"density", 1.0}}},
@@ -379,6 +387,16 @@ json demo_scene(double scale) {
         {"dirichlet", {{{"box", {{"min", {-1e-9, -1, -1}}, {"max", {1e-9, 2, 2}}}}}}},
         {"loads", {{"gravity", {0, 0, -9.81}}}},
         {"probes", {{4, 0.5, 0.5}, {2, 0.5, 0.5}, {1, 0.5, 0.5}}},
+        {"coarse",
+         {{"mesh",
+           {{"grid",
+             {{"min", {0, 0, 0}},
+              {"max", {4, 1, 1}},
+              {"cells", {nx / 8, ny / 4, ny / 4}},
+              {"element", "tet"}}}}},
+          {"levels", 3},
+          {"cell_tensors", false},
+          {"spectrum_max_dofs", 0}}},
     };
 }
 

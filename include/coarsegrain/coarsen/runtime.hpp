@@ -37,7 +37,14 @@ struct Errors {
 Errors compare(const scene::FineModel& fine, const Vector& u, const Vector& u_c);
 
 /// Names of the methods `build_coarse_model` knows, in the order reports list them.
+/// "mra-linear" and "mra-dirac" are "mra" with coarse.refinement set to "linear" / "dirac"
+/// (replacing the scene's), so that one run compares both refinements (Chen 2019, Sec. 3.7).
 const std::vector<std::string>& method_names();
+
+/// The methods a scene's "coarse" block configures (what `--method all` runs): with coarse.mesh
+/// effective-tensor, naive, voigt and reuss; with coarse.levels mra-linear and mra-dirac.
+/// @throws Error naming the scene if it configures none
+std::vector<std::string> configured_methods(const scene::Scene& scene);
 
 /// Builds the coarse model of `method` (one of method_names()) from the scene's "coarse" block.
 /// @throws InvalidScene naming the key if an option is invalid or missing for that method

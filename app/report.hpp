@@ -1,0 +1,55 @@
+#pragma once
+/// @file The comparison of several coarsening methods on one scene (`coarsegrain demo`,
+/// `coarsegrain coarsen --method a,b,...`): its table and its report (report.md with pictures).
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "coarsegrain/coarsen/runtime.hpp"
+#include "coarsegrain/scene/scene.hpp"
+
+namespace coarsegrain::app {
+
+/// The fine side of a comparison, computed once for every method.
+struct FineRun {
+    scene::FineModel model;
+    scene::StaticSolution solution;
+    Timings timings;  ///< read, assemble, factorize, solve, write
+    std::vector<Eigen::VectorXd> probes;
+
+    double factorize_and_solve() const { return timings["factorize"] + timings["solve"]; }
+};
+
+/// One method's run against the fine run.
+struct MethodResult {
+    std::string method;
+    Index dofs = 0;                  ///< coarse DOFs
+    double build_seconds = 0;        ///< sum of the build phases
+    double factorize_and_solve = 0;  ///< coarse factorization + solve, seconds
+    double speedup = 0;  ///< fine factorize + solve over coarse, measured in the same run
+    coarsen::Errors errors;
+    Vector u_fine;           ///< the coarse solution carried to the fine DOFs
+    nlohmann::json summary;  ///< the method's summary.json
+};
+
+/// Writes the comparison's report into `dir` (method i's files are in dir/<method i>/):
+/// - report_data.json: the pictures' input (every method's row and its displacement on the
+///   fine mesh's surface: boundary facets in 3D, all elements in 2D);
+/// - deformed.png (the deformed fine surface of the fine solution beside each method's, one
+///   camera and one colour scale of |u|) and methods.png (errors and speedup per method), made
+///   by scripts/plot_report.py; mra_levels.png (error per level, Chen 2019 Fig. 9) by
+///   scripts/plot_mra.py when a method wrote mra_levels.csv;
+/// - report.md: the table, the pictures made and how to read them, the files.
+/// Pictures need Python 3 with matplotlib; without, report.md says how to make them (make_plot).
+/// Returns the pictures made (file names).
+nlohmann::json write_report(const scene::Scene& scene, const std::string& command,
+                            const FineRun& fine, const std::vector<MethodResult>& results,
+                            const std::filesystem::path& dir);
+
+/// Prints the comparison table on stdout: a row per method with coarse DOFs, build and solve
+/// seconds, speedup over the fine solve and the errors.
+void print_comparison_table(const scene::Scene& scene, const std::string& command,
+                            const FineRun& fine, const std::vector<MethodResult>& results);
+
+}  // namespace coarsegrain::app
