@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "cli/cli_test_util.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
@@ -75,6 +76,57 @@ TEST(CliCoarsen, UnknownMethodIsAUsageError) {
     const Result r = cli("coarsen " + write_scene(dir, coarse_scene()) + " --method magic");
     EXPECT_EQ(r.code, 2);
     EXPECT_THAT(r.output, HasSubstr("magic"));
+}
+
+// Several methods share one fine solve; each writes what it writes alone into its own folder,
+// and the comparison adds report.md. Python is switched off: the report says the pictures were
+// not made, and the run still succeeds.
+TEST(CliCoarsen, AllMethodsCompareInOneRun) {
+    const std::string dir = temp_dir("cli_coarsen_all");
+    std::string output;
+    const int code =
+        run("COARSEGRAIN_PYTHON=false " + kCli + " --quiet coarsen " +
+                write_scene(dir, coarse_scene()) + " --method all --out " + dir + "/out",
+            &output);
+    ASSERT_EQ(code, 0) << output;
+    EXPECT_THAT(output, HasSubstr("not made"));
+    const json s = read_json(dir + "/out/summary.json");
+    const std::vector<std::string> all = {"effective-tensor", "naive",    "voigt", "reuss",
+                                          "mra-linear",       "mra-dirac"};
+    ASSERT_EQ(s["methods"].size(), all.size());
+    for (std::size_t i = 0; i < all.size(); ++i) {
+        EXPECT_EQ(s["methods"][i]["method"], all[i]);
+        const json m = read_json(dir + "/out/" + all[i] + "/summary.json");
+        EXPECT_EQ(m["method"], all[i]);
+        EXPECT_EQ(m["errors"], s["methods"][i]["errors"]);
+        EXPECT_TRUE(fs::exists(dir + "/out/" + all[i] + "/solution_coarse.vtu"));
+    }
+    EXPECT_TRUE(fs::exists(dir + "/out/solution_fine.vtu"));
+    EXPECT_FALSE(fs::exists(dir + "/out/solution_coarse.vtu"));
+    // The same computation as a run of the method alone, to round-off.
+    const json alone = run_method("reuss", temp_dir("cli_coarsen_reuss_alone"));
+    EXPECT_NEAR(s["methods"][3]["errors"]["l2_rel"].get<double>(),
+                alone["errors"]["l2_rel"].get<double>(), 1e-12);
+    std::ifstream in(dir + "/out/report.md");
+    const std::string report((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_THAT(report, HasSubstr("| reuss |"));
+    EXPECT_THAT(report, HasSubstr("deformed.png was not made"));
+}
+
+TEST(CliCoarsen, MethodListErrors) {
+    const std::string dir = temp_dir("cli_coarsen_method_list");
+    const std::string scene = write_scene(dir, coarse_scene());
+    Result r = cli("coarsen " + scene + " --method naive,magic --out " + dir + "/out");
+    EXPECT_EQ(r.code, 2);
+    EXPECT_THAT(r.output, HasSubstr("unknown method 'magic'"));
+    r = cli("coarsen " + scene + " --method naive,naive --out " + dir + "/out");
+    EXPECT_EQ(r.code, 2);
+    EXPECT_THAT(r.output, HasSubstr("'naive' is given twice"));
+    r = cli("coarsen " + write_scene(dir, small_scene(), "plain.json") + " --method all --out " +
+            dir + "/out");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_THAT(r.output, HasSubstr("configures no method"));
+    EXPECT_FALSE(fs::exists(dir + "/out/summary.json"));
 }
 
 TEST(CliCoarsen, UnknownCoarseKeyIsNamed) {
