@@ -29,36 +29,41 @@ SparseMatrix principal_submatrix(const SparseMatrix& K, const IndexVector& keep)
     return out;
 }
 
-/// Operands denser than this (and small enough to hold densely) are multiplied as dense
-/// matrices: global solves make C̃, Φ and A dense, and Eigen's sparse-sparse product of dense
-/// operands is 20-50x slower than a dense product (measured on the 32x32 grid: 1.4 s vs 0.04 s
-/// for A^4 = C̃ A C̃^T; on a 24x12x12 hex grid, two levels, C̃ 63% dense with 24M entries after
-/// global solves and truncation 1e-7: 41 s sparse, 31 s dense, on a loaded machine). Up to 6e7
-/// entries (480 MB per dense operand) are held densely.
-constexpr double kDenseProductDensity = 0.05;
+/// Eigen's sparse-sparse product costs about this many times more per multiply-add than a dense
+/// (blocked, vectorized) one: measured on the 32x32 grid after global solves, A^4 = C̃ A C̃^T
+/// took 1.4 s sparse against 0.04 s dense. Products whose dense form needs more than 6e7
+/// entries (480 MB) per operand are always sparse.
+constexpr double kSparseFlopPenalty = 30;
 constexpr double kDenseProductMaxEntries = 6e7;
 
-bool dense_enough(const SparseMatrix& M) {
-    const double size = static_cast<double>(M.rows()) * static_cast<double>(M.cols());
-    return size > 0 && size <= kDenseProductMaxEntries &&
-           static_cast<double>(M.nonZeros()) > kDenseProductDensity * size;
+double entries(const SparseMatrix& M) {
+    return static_cast<double>(M.rows()) * static_cast<double>(M.cols());
 }
 
-/// X Y, through dense arithmetic when the operands are dense (exact zeros are not stored).
+/// Multiply-adds of the sparse product X Y: sum over the entries Y_kj of nnz(X(:, k)).
+double sparse_product_flops(const SparseMatrix& X, const SparseMatrix& Y) {
+    double flops = 0;
+    for (Index j = 0; j < Y.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(Y, j); it; ++it)
+            flops += static_cast<double>(X.col(it.row()).nonZeros());
+    return flops;
+}
+
+/// X Y by the cheaper of the sparse product and the dense one (exact zeros are not stored).
+/// Global solves make C̃ and A dense, localized solves keep them sparse: on a 24x8x8 hex grid
+/// with rho = 3 fine rings (C̃ 10% dense), the dense A^1 = C̃ A C̃^T took 12 s and the sparse
+/// one 0.5 s, on a loaded machine.
 SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y) {
-    if (!dense_enough(Y)) {
-        if (dense_enough(X)) {
-            SparseMatrix out = Matrix(Matrix(X) * Y).sparseView(0.0, 0.0);
-            out.makeCompressed();
-            return out;
-        }
+    const double dense_flops = entries(X) * static_cast<double>(Y.cols());
+    const bool fits =
+        entries(X) <= kDenseProductMaxEntries && entries(Y) <= kDenseProductMaxEntries &&
+        static_cast<double>(X.rows()) * static_cast<double>(Y.cols()) <= kDenseProductMaxEntries;
+    if (!fits || kSparseFlopPenalty * sparse_product_flops(X, Y) <= dense_flops) {
         SparseMatrix P = X * Y;
         P.makeCompressed();
         return P;
     }
-    const Matrix Yd = Matrix(Y);
-    const Matrix P = dense_enough(X) ? Matrix(Matrix(X) * Yd) : Matrix(X * Yd);
-    SparseMatrix out = P.sparseView(0.0, 0.0);
+    SparseMatrix out = Matrix(Matrix(X) * Matrix(Y)).sparseView(0.0, 0.0);
     out.makeCompressed();
     return out;
 }
@@ -73,6 +78,15 @@ SparseMatrix symmetrized(const SparseMatrix& M) {
 /// M X M^T for symmetric X, exactly symmetric.
 SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X) {
     return symmetrized(product(M, product(X, SparseMatrix(M.transpose()))));
+}
+
+/// Φ^q: the selection of the present fine DOFs, #fine_dofs by fine grid DOFs.
+SparseMatrix fine_selection(const Hierarchy& h) {
+    SparseMatrix Phi(h.fine_dofs.size(), h.fine_grid_dofs());
+    std::vector<Triplet> t;
+    for (Index i = 0; i < h.fine_dofs.size(); ++i) t.emplace_back(i, h.fine_dofs[i], 1.0);
+    Phi.setFromTriplets(t.begin(), t.end());
+    return Phi;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -149,6 +163,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
               q - 1);
     for (const double r : options.radius)
         CG_VERIFY(r >= 1, "mra: radius {} must be at least 1 (or infinity)", r);
+    CG_VERIFY(options.patch >= 1, "mra: patch = {} must be at least 1", options.patch);
     CG_VERIFY(options.truncation >= 0 && options.truncation < 1,
               "mra: truncation = {} must be in [0, 1)", options.truncation);
     CG_VERIFY(options.penalty > 0, "mra: penalty = {} must be positive", options.penalty);
@@ -193,13 +208,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     std::vector<char> fixed_node(static_cast<std::size_t>(mesh.num_nodes()), 0);
     for (const Index d : fixed_dofs) fixed_node[static_cast<std::size_t>(d / dim)] = 1;
 
-    // Φ^q: selection of the present fine DOFs.
-    SparseMatrix Phi(h.fine_dofs.size(), n_dofs);
-    {
-        std::vector<Triplet> t;
-        for (Index k = 0; k < h.fine_dofs.size(); ++k) t.emplace_back(k, h.fine_dofs[k], 1.0);
-        Phi.setFromTriplets(t.begin(), t.end());
-    }
+    SparseMatrix Phi = options.store_bases ? fine_selection(h) : SparseMatrix();
 
     // Rigid motions on the present DOFs of the current finer level (invariance correction), in
     // units of the largest fine spacing.
@@ -258,7 +267,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             SparseMatrix Z;
             {
                 const Phase phase(tag + "Z (localized solves)", &h.timings);
-                Z = detail::localized_z(L.B, R, L.W, g, rings);
+                Z = detail::localized_z(L.B, R, L.W, g, rings, options.patch);
             }
             const Phase phase(tag + "C adapted", &h.timings);
             L.C_adapted = L.C_dagger + product(Z, L.W);
@@ -310,7 +319,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                                      dim == 3 ? fine_cells[2] + 1 : 1);
             const int reach = std::isinf(L.radius)
                                   ? nf.maxCoeff()
-                                  : rings + (options.refinement == Refinement::Linear ? 1 : 0);
+                                  : rings + 2 * (options.patch - 1) +
+                                        (options.refinement == Refinement::Linear ? 1 : 0);
             for (Index i = 0; i < coarse_nodes; ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)
@@ -342,17 +352,39 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             const Phase phase(tag + "A", &h.timings);
             L.A = congruence(L.C_adapted, A);
         }
-        {
+        if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);
             L.Psi = product(L.W, Phi);
             L.Phi = product(L.C_adapted, Phi);
+            Phi = L.Phi;
         }
         L.build_seconds = seconds_since(t0);
-        Phi = L.Phi;
         A_next = &L.A;
         dofs_next = L.dofs;
     }
     return h;
+}
+
+SparseMatrix basis(const Hierarchy& h, int k) {
+    const int q = h.num_levels();
+    CG_VERIFY(k >= 1 && k <= q, "mra: level {} out of range 1..{}", k, q);
+    if (k < q && h.options.store_bases) return h.level(k).Phi;
+    SparseMatrix Phi = fine_selection(h);
+    for (int l = q - 1; l >= k; --l) Phi = product(h.level(l).C_adapted, Phi);
+    return Phi;
+}
+
+Vector reconstruct(const Hierarchy& h, const Vector& u_k, int k) {
+    const int q = h.num_levels();
+    CG_VERIFY(k >= 1 && k <= q, "mra: level {} out of range 1..{}", k, q);
+    const Index n = k == q ? h.fine_dofs.size() : h.level(k).dofs.size();
+    CG_VERIFY(u_k.size() == n, "mra: {} coefficients for the {} DOFs of level {}", u_k.size(), n,
+              k);
+    Vector u = u_k;
+    for (int l = k; l < q; ++l) u = h.level(l).C_adapted.transpose() * u;
+    Vector out = Vector::Zero(h.fine_grid_dofs());
+    for (Index i = 0; i < h.fine_dofs.size(); ++i) out[h.fine_dofs[i]] = u[i];
+    return out;
 }
 
 Vector coarse_grain(const Hierarchy& h, const Vector& g_fine, int k) {

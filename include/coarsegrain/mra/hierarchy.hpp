@@ -111,6 +111,13 @@ struct Options {
     /// factorization of B^k for all columns of Z).
     std::vector<double> radius = {std::numeric_limits<double>::infinity()};
     RadiusGrid radius_grid = RadiusGrid::Fine;
+    /// Patch-wise localization (finite radii only): coarse nodes per axis of a patch. The
+    /// nodes of a patch (a block of patch^dim coarse nodes) share one region, the fine nodes
+    /// within rho rings of any of them, and one factorization of B^k on it for all their
+    /// columns. 1: the paper's per-node regions. A larger patch enlarges every node's region
+    /// (at least as accurate as patch 1 with the same rho) and divides the number of
+    /// factorizations by patch^dim.
+    int patch = 1;
     /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, an entry
     /// C̃_ij is dropped if |C̃_ij| < tau max_l |C̃_il| (relative to the largest coefficient of
     /// the same basis function). A^k = C̃^k A^{k+1} C̃^{k,T} is then the exact Galerkin matrix of
@@ -125,6 +132,10 @@ struct Options {
     DirichletTreatment dirichlet = DirichletTreatment::Constrain;
     /// Penalty / DiagonalPenalty magnitude (absolute, or relative to K_ii).
     double penalty = 1e8;
+    /// Keep Φ^k and Ψ^k (against the finest grid) in every Level. Off by default: they hold
+    /// more entries than all C̃^k together (128x128 quads, 3 levels: 12 GB), and basis() and
+    /// reconstruct() give Φ^k and Φ^{k,T} u^k on demand from the C̃^k.
+    bool store_bases = false;
 };
 
 /// One level k < q of the hierarchy, built from level k+1 (Algorithm 1, lines 2-7).
@@ -141,9 +152,9 @@ struct Level {
     SparseMatrix C_adapted;  ///< C̃^k = C^{k,†} + Z W^k (Eq. 11), localized/corrected/truncated
     SparseMatrix A;          ///< A^k = C̃^k A^{k+1} C̃^{k,T} (Alg. 1 line 7)
     SparseMatrix B;          ///< B^k = W^k A^{k+1} W^{k,T} (Alg. 1 line 2)
-    SparseMatrix Phi;        ///< Φ^k = C̃^k Φ^{k+1}: #dofs by fine grid DOFs
-    SparseMatrix Psi;        ///< Ψ^k = W^k Φ^{k+1}: #wavelets by fine grid DOFs
-    double radius = 0;       ///< rho used for this step
+    SparseMatrix Phi;  ///< Φ^k = C̃^k Φ^{k+1}: #dofs by fine grid DOFs (if store_bases, else 0x0)
+    SparseMatrix Psi;   ///< Ψ^k = W^k Φ^{k+1}: #wavelets by fine grid DOFs (if store_bases)
+    double radius = 0;  ///< rho used for this step
     /// Per node of level k+1: 1 if the invariance correction was applied to its columns of C̃.
     std::vector<char> invariance_applied;
     /// Per node of level k: 1 if it lies on a fixed node of the finest grid. The invariance
@@ -189,6 +200,16 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
 /// Restricts a fine vector (fine grid DOFs) to the hierarchy's fine DOFs and coarse-grains it to
 /// level k (Sec. 3.6): g^k = C̃^k ... C̃^{q-1} g^q.
 Vector coarse_grain(const Hierarchy& h, const Vector& g_fine, int k);
+
+/// Φ^k = C̃^k ... C̃^{q-1} Φ^q (#dofs of level k by fine grid DOFs; k = q: the selection of the
+/// present fine DOFs): the stored one if Options::store_bases, else computed.
+/// @throws Error if k is not in 1..q
+SparseMatrix basis(const Hierarchy& h, int k);
+
+/// Φ^{k,T} u^k over all fine grid DOFs, computed level by level as
+/// u^{l+1} = C̃^{l,T} u^l for l = k..q-1 (zeros at eliminated DOFs), without Φ^k.
+/// @throws Error if k is not in 1..q or u_k has the wrong size
+Vector reconstruct(const Hierarchy& h, const Vector& u_k, int k);
 
 /// Bytes of a compressed sparse matrix (values, inner and outer indices).
 std::size_t storage_bytes(const SparseMatrix& M);
