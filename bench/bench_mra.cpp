@@ -4,6 +4,7 @@
 //
 //   bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7]
 //             [radius_grid=fine|coarse] [refinement=linear|dirac] [patch=1] [scene=checker|FILE]
+//             [invariance=1|0]
 //
 // scene "checker": the grid spans [0, NX/NY] x [0, 1] x [0, NZ/NY] (cubic cells), hung from its
 // face y = 1 under gravity and a traction on y = 0, with the checker inclusions of the hierarchy
@@ -86,7 +87,7 @@ int main(int argc, char** argv) {
             stderr,
             "usage: bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7] "
             "[radius_grid=fine|coarse] [refinement=linear|dirac] [patch=1] "
-            "[scene=checker|FILE]\n");
+            "[scene=checker|FILE] [invariance=1|0]\n");
         return 2;
     }
     const Eigen::Vector3i cells(std::atoi(argv[1]), std::atoi(argv[2]), std::atoi(argv[3]));
@@ -108,14 +109,17 @@ int main(int argc, char** argv) {
                                                                : cg::mra::Refinement::Linear;
     o.patch = argc > 9 ? std::atoi(argv[9]) : 1;
     const std::string scene = argc > 10 ? argv[10] : "checker";
+    o.invariance = argc > 11 ? std::atoi(argv[11]) != 0 : true;
     auto t0 = std::chrono::steady_clock::now();
     const cg::test::GridProblem p = make_problem(cells, scene);
     std::printf("%s grid %dx%dx%d: %ld nodes, %ld DOFs; problem set up in %.2f s, peak %.0f MB\n",
                 scene.c_str(), cells[0], cells[1], cells[2], static_cast<long>(p.mesh.num_nodes()),
                 static_cast<long>(p.mesh.num_dofs()), since(t0), peak_mb());
-    std::printf("levels %d, %s refinement, radius %s (%s rings), patch %d, truncation %g\n",
-                o.levels, cg::mra::refinement_name(o.refinement).c_str(), radius.c_str(),
-                cg::mra::radius_grid_name(o.radius_grid).c_str(), o.patch, o.truncation);
+    std::printf(
+        "levels %d, %s refinement, radius %s (%s rings), patch %d, truncation %g, invariance %d\n",
+        o.levels, cg::mra::refinement_name(o.refinement).c_str(), radius.c_str(),
+        cg::mra::radius_grid_name(o.radius_grid).c_str(), o.patch, o.truncation,
+        static_cast<int>(o.invariance));
     t0 = std::chrono::steady_clock::now();
     const cg::mra::Hierarchy h = cg::mra::build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
     const double build = since(t0);
