@@ -75,6 +75,49 @@
 /// paid in 3D: on a 24x12x12 hex grid C̃ stays 63% dense and A^1 dense (bench/bench_mra), so
 /// localized radii (with per-step values, e.g. global for the coarse steps) remain the option
 /// for large 3D models, at a much larger error.
+///
+/// ## Cost in 3D (bench/bench_mra)
+/// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
+/// clamped at x = 0, gravity), hex grids, 3 levels (coarsest = grid / 4), truncation 1e-7,
+/// invariance correction, rho in fine rings, patch 1, OMP_NUM_THREADS=2 on a 2-core machine
+/// loaded by 2-3 other jobs (times vary by 1.5x between runs). build = build_hierarchy; peak =
+/// process high-water mark (includes the fine problem and its CHOLMOD solve, ~500 MB at
+/// 64x16x16); speedup = fine factorize + solve over coarsest factorize + solve.
+///
+/// | grid     | refinement, rho | build s | peak MB | coarsest error | speedup |
+/// |----------|-----------------|---------|---------|----------------|---------|
+/// | 32x8x8   | linear, global  | 16.0    | 612     | 0.0029         | 37x     |
+/// | 32x8x8   | Dirac, global   | 7.9     | 350     | 0.0156         | 121x    |
+/// | 32x8x8   | linear, 2       | 5.0     | 136     | 0.999          | 40x     |
+/// | 32x8x8   | Dirac, 2        | 0.8     | 80      | 0.977          | 77x     |
+/// | 32x8x8   | Dirac, 1        | 0.7     | 69      | 0.81           | 254x    |
+/// | 48x12x12 | linear, 2       | 27.5    | 514     | 0.994          | 22x     |
+/// | 48x12x12 | Dirac, 2        | 2.7     | 278     | 0.978          | 69x     |
+/// | 48x12x12 | Dirac, 1        | 2.6     | 231     | 0.984          | 102x    |
+/// | 64x16x16 | linear, 2       | 78.6    | 1156    | 0.990          | 15x     |
+/// | 64x16x16 | linear, 1       | 6.2     | 811     | 1.000          | 73x     |
+/// | 64x16x16 | Dirac, 2        | 12.3    | 696     | 0.987          | 28x     |
+/// | 64x16x16 | Dirac, 1        | 2.3     | 619     | 0.61           | 196x    |
+///
+/// Builds are fast now, but on this cantilever every small radius fails: a coarsest error of
+/// 0.6-1.0 means the coarse model hardly moves (locking), against 0.003 for global solves.
+/// Larger regions do not help either within 20 s: on 32x8x8 with Dirac refinement, global solves
+/// at the coarse step and rho = 2 / 4 / 6 at the fine step gave 0.92 / 0.81 / 0.39 (2 s, 19 s,
+/// 21 s), and rho = 1 with patch 2 0.87. The errors do not even decrease monotonically with
+/// the grid or the radius. It is the amplification described above: the beam's large, smooth
+/// bending displacement needs basis functions exact to ~1e-5, which only regions spanning the
+/// beam give. The same cases before this change (dense Galerkin products, dense local solves up
+/// to 400 unknowns, Φ^k and Ψ^k kept): 24x8x8 checker, 2 levels, rho = 3: 30 s and 0.671 (now
+/// 4.8 s, same C̃ and error); 16x8x8 checker, 3 levels, rho = 5: 30 s, 171 MB.
+///
+/// Where the time went (perf, 24x8x8 checker, rho = 3): dense Galerkin products and their page
+/// faults (55%), then the sparse local factorizations (18%). Now the products pick sparse or
+/// dense by their multiply-add count (sparse Gustavson, parallel, lower triangle only for
+/// A^k), and localized solves dominate: the sparse factorizations of the fine step's regions
+/// (64x16x16, linear, rho = 2: 39 s of 67 s) and the products with the dense A^2 of the coarse
+/// step. Patches (Options::patch) trade fewer factorizations for larger regions and a denser C̃:
+/// patch 2 on that case cut the fine step's solves from 39 s to 27 s but doubled C̃ and raised
+/// the time of A^2 from 4 s to 22 s, for the same error (0.988).
 #include <limits>
 #include <string>
 #include <vector>
