@@ -32,11 +32,13 @@ constexpr Index kMinParallelColumns = 4096;
 /// a sparse Cholesky with AMD ordering. Measured on the 64x16x16 accordion, rho = 2 fine rings,
 /// loaded machine: the systems of the fine step (~1000 wavelets) took 45 s sparse and 61 s
 /// dense, those of the coarse step (B^1 27% dense) 30 s sparse and under 1 s dense. CHOLMOD
-/// (solve::SpdSolver) took 4x longer than the simplicial factorization on the fine step's
-/// systems (32x8x8 accordion: 16 s against 4 s).
+/// (solve::SpdSolver, supernodal) took 4x longer than the simplicial factorization on such
+/// systems (32x8x8 accordion: 16 s against 4 s) but pays from kSupernodalLocalMin unknowns
+/// (20x10x10 checker, rho = 5, regions of ~4000 wavelets: 18-20 s against 26 s, load ~8).
 constexpr Index kDenseLocalLimit = 400;
 constexpr Index kDenseLocalMax = 4000;
 constexpr double kDenseLocalDensity = 0.25;
+constexpr Index kSupernodalLocalMin = 2500;
 
 /// Solves b x = rhs for a local SPD matrix b (compressed, both triangles).
 Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
@@ -48,6 +50,11 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
         CG_VERIFY(llt.info() == Eigen::Success,
                   "mra: a local wavelet stiffness (n = {}) is not positive definite", b.rows());
         return llt.solve(rhs);
+    }
+    if (b.rows() >= kSupernodalLocalMin) {
+        solve::SpdSolver solver;
+        solver.compute(b);
+        return solver.solve(rhs);
     }
     Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>> llt(b);
     CG_VERIFY(llt.info() == Eigen::Success,
