@@ -4,7 +4,8 @@
 ///
 /// Notation (shared/papers/NOTES.md): canonical quantities C^k, W^k, C^{k,†}; material-adapted
 /// refinement C̃^k (the paper's outline C^k), stiffness A^k, wavelet stiffness B^k, basis Φ^k and
-/// wavelets Ψ^k, all stored against the finest basis (Φ^q = I). Level 1 is the coarsest, level q
+/// wavelets Ψ^k, expressed against the finest basis (Φ^q = I) and kept only on request
+/// (Options::store_bases; basis() and reconstruct() otherwise). Level 1 is the coarsest, level q
 /// the finest; step k builds level k from level k+1.
 ///
 /// ## Dirichlet conditions (DirichletTreatment)
@@ -106,9 +107,12 @@
 /// 21 s), and rho = 1 with patch 2 0.87. The errors do not even decrease monotonically with
 /// the grid or the radius. It is the amplification described above: the beam's large, smooth
 /// bending displacement needs basis functions exact to ~1e-5, which only regions spanning the
-/// beam give. The same cases before this change (dense Galerkin products, dense local solves up
-/// to 400 unknowns, Φ^k and Ψ^k kept): 24x8x8 checker, 2 levels, rho = 3: 30 s and 0.671 (now
-/// 4.8 s, same C̃ and error); 16x8x8 checker, 3 levels, rho = 5: 30 s, 171 MB.
+/// beam give. Against the previous implementation (Galerkin products dense above 5% density,
+/// simplicial local solves, Φ^k and Ψ^k kept), same C̃ and errors, checker bench problem:
+/// 24x8x8, 2 levels, rho = 3: 30 s -> 3.2 s (180 MB); 16x8x8, 3 levels, rho = 5:
+/// 30 s / 171 MB -> 9.0 s / 132 MB. Large regions stay expensive: 40x20x20, 3 levels, rho = 5
+/// (regions of ~4000 wavelets per coarse node) was 359 s / 880 MB and is still over 400 s here
+/// (606 MB; supernodal factorization of such regions saves ~25%).
 ///
 /// Where the time went (perf, 24x8x8 checker, rho = 3): dense Galerkin products and their page
 /// faults (55%), then the sparse local factorizations (18%). Now the products pick sparse or
