@@ -55,7 +55,13 @@ constexpr Index kMinParallelProductColumns = 256;
 
 /// X Y by Gustavson's column-by-column algorithm with a dense accumulator per thread, in parallel
 /// over the columns of Y (OpenMP). With `lower`, only the entries on or below the diagonal.
+/// Exact zeros (cancellations) are not stored; the row indices come out sorted.
 SparseMatrix sparse_product(const SparseMatrix& X, const SparseMatrix& Y, bool lower) {
+    if (!X.isCompressed()) {
+        SparseMatrix compressed = X;
+        compressed.makeCompressed();
+        return sparse_product(compressed, Y, lower);
+    }
     const Index m = static_cast<Index>(X.rows()), n = static_cast<Index>(Y.cols());
     std::vector<std::vector<Index>> rows(static_cast<std::size_t>(n));
     std::vector<std::vector<double>> values(static_cast<std::size_t>(n));

@@ -111,8 +111,9 @@
 /// simplicial local solves, Φ^k and Ψ^k kept), same C̃ and errors, checker bench problem:
 /// 24x8x8, 2 levels, rho = 3: 30 s -> 3.2 s (180 MB); 16x8x8, 3 levels, rho = 5:
 /// 30 s / 171 MB -> 9.0 s / 132 MB. Large regions stay expensive: 40x20x20, 3 levels, rho = 5
-/// (regions of ~4000 wavelets per coarse node) was 359 s / 880 MB and is still over 400 s here
-/// (606 MB; supernodal factorization of such regions saves ~25%).
+/// (regions of ~4000 wavelets per coarse node at the fine step, ~6000 and 54% dense at the
+/// coarse one) was 359 s / 880 MB and took 409 s / 2.07 GB here (error 0.690; the local
+/// factorizations are 85% of the time; where the peak memory goes was not analysed).
 ///
 /// Where the time went (perf, 24x8x8 checker, rho = 3): dense Galerkin products and their page
 /// faults (55%), then the sparse local factorizations (18%). Now the products pick sparse or
