@@ -1,20 +1,25 @@
 // Build cost of the material-adapted hierarchy on 3D hex grids (Chen et al. 2019, Table 1):
-// build time phase by phase, storage, and the coarsest factorize + solve against the fine
-// CHOLMOD factorize + solve of the same problem, measured in one run.
+// build time phase by phase, storage, peak memory, and the coarsest factorize + solve against the
+// fine CHOLMOD factorize + solve of the same problem, measured in one run.
 //
 //   bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7]
-//             [radius_grid=fine|coarse]
+//             [radius_grid=fine|coarse] [refinement=linear|dirac] [patch=1] [scene=checker|FILE]
+//             [invariance=1|0]
 //
-// The grid spans [0, NX/NY] x [0, 1] x [0, NZ/NY] (cubic cells), hung from its face y = 1 under
-// gravity and a traction on y = 0, with the checker inclusions of the hierarchy tests
-// (contrast 1000). Times are wall seconds on a shared 2-core machine.
+// scene "checker": the grid spans [0, NX/NY] x [0, 1] x [0, NZ/NY] (cubic cells), hung from its
+// face y = 1 under gravity and a traction on y = 0, with the checker inclusions of the hierarchy
+// tests (contrast 1000). Otherwise a scene file (e.g. examples/accordion/accordion.json) whose
+// grid is given NX x NY x NZ cells. Times are wall seconds on a shared 2-core machine.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "coarsegrain/mra/multilevel_solver.hpp"
+#include "coarsegrain/scene/scene.hpp"
 #include "mra/mra_test_util.hpp"
 
 namespace cg = coarsegrain;
@@ -38,6 +43,42 @@ std::pair<double, double> factorize_and_solve(const cg::SparseMatrix& A, const c
     return {factorize, solve};
 }
 
+/// Peak resident memory of the process in MB (VmHWM), 0 if unknown.
+double peak_mb() {
+    std::ifstream status("/proc/self/status");
+    std::string key;
+    while (status >> key) {
+        if (key == "VmHWM:") {
+            double kb = 0;
+            status >> kb;
+            return kb / 1e3;
+        }
+        status.ignore(1 << 20, '\n');
+    }
+    return 0;
+}
+
+/// The fine problem: the checker bench problem or a scene file with the given grid cells.
+cg::test::GridProblem make_problem(const Eigen::Vector3i& cells, const std::string& scene) {
+    if (scene == "checker")
+        return cg::test::hung_problem(3, cells, 1.0, 1e3, cg::test::checker_pattern,
+                                      cells.cast<double>() / cells[1]);
+    std::ifstream in(scene);
+    if (!in) throw std::runtime_error("bench_mra: cannot read scene file " + scene);
+    nlohmann::json j = nlohmann::json::parse(in);
+    j["mesh"]["grid"]["cells"] = {cells[0], cells[1], cells[2]};
+    const cg::scene::Scene sc = cg::scene::parse_scene(j, scene, ".");
+    cg::scene::FineModel fine = cg::scene::build_fine_model(sc);
+    cg::test::GridProblem p;
+    p.u = cg::scene::solve_static(fine, {}).u;
+    p.mesh = std::move(fine.mesh);
+    p.materials = std::move(fine.materials);
+    p.K = std::move(fine.K);
+    p.f = std::move(fine.f);
+    p.bc = std::move(fine.bc);
+    return p;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -45,7 +86,8 @@ int main(int argc, char** argv) {
         std::fprintf(
             stderr,
             "usage: bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7] "
-            "[radius_grid=fine|coarse]\n");
+            "[radius_grid=fine|coarse] [refinement=linear|dirac] [patch=1] "
+            "[scene=checker|FILE] [invariance=1|0]\n");
         return 2;
     }
     const Eigen::Vector3i cells(std::atoi(argv[1]), std::atoi(argv[2]), std::atoi(argv[3]));
@@ -63,15 +105,21 @@ int main(int argc, char** argv) {
     o.truncation = argc > 6 ? std::atof(argv[6]) : 1e-7;
     o.radius_grid = argc > 7 && std::string(argv[7]) == "coarse" ? cg::mra::RadiusGrid::Coarse
                                                                  : cg::mra::RadiusGrid::Fine;
-    const Eigen::Vector3d size = cells.cast<double>() / cells[1];
+    o.refinement = argc > 8 && std::string(argv[8]) == "dirac" ? cg::mra::Refinement::Dirac
+                                                               : cg::mra::Refinement::Linear;
+    o.patch = argc > 9 ? std::atoi(argv[9]) : 1;
+    const std::string scene = argc > 10 ? argv[10] : "checker";
+    o.invariance = argc > 11 ? std::atoi(argv[11]) != 0 : true;
     auto t0 = std::chrono::steady_clock::now();
-    const cg::test::GridProblem p =
-        cg::test::hung_problem(3, cells, 1.0, 1e3, cg::test::checker_pattern, size);
-    std::printf("grid %dx%dx%d: %ld nodes, %ld DOFs; problem set up in %.2f s\n", cells[0],
-                cells[1], cells[2], static_cast<long>(p.mesh.num_nodes()),
-                static_cast<long>(p.mesh.num_dofs()), since(t0));
-    std::printf("levels %d, radius %s (%s rings), truncation %g\n", o.levels, radius.c_str(),
-                cg::mra::radius_grid_name(o.radius_grid).c_str(), o.truncation);
+    const cg::test::GridProblem p = make_problem(cells, scene);
+    std::printf("%s grid %dx%dx%d: %ld nodes, %ld DOFs; problem set up in %.2f s, peak %.0f MB\n",
+                scene.c_str(), cells[0], cells[1], cells[2], static_cast<long>(p.mesh.num_nodes()),
+                static_cast<long>(p.mesh.num_dofs()), since(t0), peak_mb());
+    std::printf(
+        "levels %d, %s refinement, radius %s (%s rings), patch %d, truncation %g, invariance %d\n",
+        o.levels, cg::mra::refinement_name(o.refinement).c_str(), radius.c_str(),
+        cg::mra::radius_grid_name(o.radius_grid).c_str(), o.patch, o.truncation,
+        static_cast<int>(o.invariance));
     t0 = std::chrono::steady_clock::now();
     const cg::mra::Hierarchy h = cg::mra::build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
     const double build = since(t0);
@@ -86,7 +134,8 @@ int main(int argc, char** argv) {
                     static_cast<long>(L.A.nonZeros()), static_cast<long>(L.B.nonZeros()),
                     static_cast<long>(L.Phi.nonZeros()), static_cast<long>(L.Psi.nonZeros()));
     }
-    std::printf("build %.2f s, storage %.1f MB\n", build, static_cast<double>(bytes) / 1e6);
+    std::printf("build %.2f s, storage %.1f MB, peak %.0f MB\n", build,
+                static_cast<double>(bytes) / 1e6, peak_mb());
     for (const auto& [phase, s] : h.timings.entries())
         std::printf("  %-40s %8.3f s\n", phase.c_str(), s);
 

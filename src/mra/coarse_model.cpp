@@ -169,6 +169,10 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
                        s);
         o.radius_grid = s == "fine" ? RadiusGrid::Fine : RadiusGrid::Coarse;
     }
+    if (auto v = r.find("patch")) {
+        o.patch = v->integer();
+        v->fail_unless(o.patch >= 1, "expected an integer >= 1, got {}", o.patch);
+    }
     if (auto v = r.find("truncation")) {
         o.truncation = v->number();
         v->fail_unless(o.truncation >= 0 && o.truncation < 1, "expected a number in [0, 1), got {}",
@@ -223,7 +227,7 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
     m.K = P * L1.A * SparseMatrix(P.transpose());
     m.K.makeCompressed();
     m.f = P * coarse_grain(h, f_fine, 1);
-    m.to_fine = SparseMatrix(L1.Phi.transpose()) * SparseMatrix(P.transpose());
+    m.to_fine = SparseMatrix(basis(h, 1).transpose()) * SparseMatrix(P.transpose());
     m.to_fine.makeCompressed();
     std::vector<Index> dropped(L1.dropped_dofs.data(),
                                L1.dropped_dofs.data() + L1.dropped_dofs.size());
@@ -244,6 +248,7 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
                            {"truncation", o.truncation},
                            {"invariance", o.invariance},
                            {"dirichlet", dirichlet_name(o.dirichlet)}};
+    m.report["options"]["patch"] = o.patch;
     nlohmann::json levels = nlohmann::json::array();
     for (const Level& L : h.levels) {
         levels.push_back(

@@ -29,9 +29,16 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
 /// R_i holds the level-(k+1) nodes within `rings` grid rings (Chebyshev distance) of the node
 /// coincident with i; S_i are the wavelets (rows of W) with a nonzero on a node of R_i; the rows
 /// of Z for the DOFs of node i solve B[S_i, S_i] z = -R[S_i, DOFs of i] and vanish outside S_i.
-/// The nodes are processed in parallel (OpenMP), each with its own sparse Cholesky factorization.
+///
+/// Patch-wise localization: with patch > 1 the coarse nodes are grouped in blocks of patch^dim
+/// nodes (by grid coordinates, block index floor(c / patch) per axis) and every node of a block
+/// uses the block's region, the fine nodes within `rings` of any node of the block: one
+/// factorization of B[S, S] serves all its columns. Whatever the patch, nodes (or blocks) whose
+/// regions coincide after clipping to the grid share one factorization; with patch = 1 this
+/// changes nothing but the cost. The regions are processed in parallel (OpenMP), each with its
+/// own dense (small) or sparse Cholesky factorization.
 SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
-                         const StepGeometry& g, int rings);
+                         const StepGeometry& g, int rings, int patch);
 
 /// Drops entries with |M_ij| < tau max_l |M_il| (row-relative).
 void truncate_rows(SparseMatrix& M, double tau);

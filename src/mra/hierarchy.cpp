@@ -29,38 +29,141 @@ SparseMatrix principal_submatrix(const SparseMatrix& K, const IndexVector& keep)
     return out;
 }
 
-/// Operands denser than this (and small enough to hold densely) are multiplied as dense
-/// matrices: global solves make C̃, Φ and A dense, and Eigen's sparse-sparse product of dense
-/// operands is 20-50x slower than a dense product (measured on the 32x32 grid: 1.4 s vs 0.04 s
-/// for A^4 = C̃ A C̃^T; on a 24x12x12 hex grid, two levels, C̃ 63% dense with 24M entries after
-/// global solves and truncation 1e-7: 41 s sparse, 31 s dense, on a loaded machine). Up to 6e7
-/// entries (480 MB per dense operand) are held densely.
-constexpr double kDenseProductDensity = 0.05;
+/// Eigen's sparse-sparse product costs about this many times more per multiply-add than a dense
+/// (blocked, vectorized) one: measured on the 32x32 grid after global solves, A^4 = C̃ A C̃^T
+/// took 1.4 s sparse against 0.04 s dense. Products whose dense form needs more than 6e7
+/// entries (480 MB) per operand are always sparse.
+constexpr double kSparseFlopPenalty = 30;
 constexpr double kDenseProductMaxEntries = 6e7;
 
-bool dense_enough(const SparseMatrix& M) {
-    const double size = static_cast<double>(M.rows()) * static_cast<double>(M.cols());
-    return size > 0 && size <= kDenseProductMaxEntries &&
-           static_cast<double>(M.nonZeros()) > kDenseProductDensity * size;
+double entries(const SparseMatrix& M) {
+    return static_cast<double>(M.rows()) * static_cast<double>(M.cols());
 }
 
-/// X Y, through dense arithmetic when the operands are dense (exact zeros are not stored).
-SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y) {
-    if (!dense_enough(Y)) {
-        if (dense_enough(X)) {
-            SparseMatrix out = Matrix(Matrix(X) * Y).sparseView(0.0, 0.0);
-            out.makeCompressed();
-            return out;
-        }
-        SparseMatrix P = X * Y;
-        P.makeCompressed();
-        return P;
+/// Multiply-adds of the sparse product X Y: sum over the entries Y_kj of nnz(X(:, k)).
+double sparse_product_flops(const SparseMatrix& X, const SparseMatrix& Y) {
+    double flops = 0;
+    for (Index j = 0; j < Y.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(Y, j); it; ++it)
+            flops += static_cast<double>(X.col(it.row()).nonZeros());
+    return flops;
+}
+
+/// Columns per OpenMP chunk of sparse_product, and the fewest columns worth a second thread.
+constexpr Index kProductChunk = 16;
+constexpr Index kMinParallelProductColumns = 256;
+
+/// X Y by Gustavson's column-by-column algorithm with a dense accumulator per thread, in parallel
+/// over the columns of Y (OpenMP). With `lower`, only the entries on or below the diagonal.
+/// Exact zeros (cancellations) are not stored; the row indices come out sorted.
+SparseMatrix sparse_product(const SparseMatrix& X, const SparseMatrix& Y, bool lower) {
+    if (!X.isCompressed()) {
+        SparseMatrix compressed = X;
+        compressed.makeCompressed();
+        return sparse_product(compressed, Y, lower);
     }
-    const Matrix Yd = Matrix(Y);
-    const Matrix P = dense_enough(X) ? Matrix(Matrix(X) * Yd) : Matrix(X * Yd);
-    SparseMatrix out = P.sparseView(0.0, 0.0);
+    const Index m = static_cast<Index>(X.rows()), n = static_cast<Index>(Y.cols());
+    std::vector<std::vector<Index>> rows(static_cast<std::size_t>(n));
+    std::vector<std::vector<double>> values(static_cast<std::size_t>(n));
+#pragma omp parallel if (n >= kMinParallelProductColumns)
+    {
+        std::vector<double> acc(static_cast<std::size_t>(m), 0.0);
+        std::vector<char> used(static_cast<std::size_t>(m), 0);
+        std::vector<Index> pattern;
+#pragma omp for schedule(dynamic, kProductChunk)
+        for (Index j = 0; j < n; ++j) {
+            pattern.clear();
+            for (SparseMatrix::InnerIterator y(Y, j); y; ++y) {
+                const Index k = static_cast<Index>(y.row());
+                const Index* begin = X.innerIndexPtr() + X.outerIndexPtr()[k];
+                const Index* end = X.innerIndexPtr() + X.outerIndexPtr()[k + 1];
+                const Index* first = lower ? std::lower_bound(begin, end, j) : begin;
+                const double* v = X.valuePtr() + (first - X.innerIndexPtr());
+                for (const Index* i = first; i != end; ++i, ++v) {
+                    const auto r = static_cast<std::size_t>(*i);
+                    if (!used[r]) {
+                        used[r] = 1;
+                        pattern.push_back(*i);
+                    }
+                    acc[r] += *v * y.value();
+                }
+            }
+            std::sort(pattern.begin(), pattern.end());
+            auto& col_rows = rows[static_cast<std::size_t>(j)];
+            auto& col_values = values[static_cast<std::size_t>(j)];
+            col_rows.reserve(pattern.size());
+            col_values.reserve(pattern.size());
+            for (const Index i : pattern) {
+                const auto r = static_cast<std::size_t>(i);
+                if (acc[r] != 0.0) {
+                    col_rows.push_back(i);
+                    col_values.push_back(acc[r]);
+                }
+                acc[r] = 0.0;
+                used[r] = 0;
+            }
+        }
+    }
+    std::size_t nnz = 0;
+    for (const auto& r : rows) nnz += r.size();
+    SparseMatrix P(m, n);
+    P.resizeNonZeros(static_cast<Index>(nnz));
+    Index* outer = P.outerIndexPtr();
+    outer[0] = 0;
+    for (Index j = 0; j < n; ++j) {
+        auto& r = rows[static_cast<std::size_t>(j)];
+        auto& v = values[static_cast<std::size_t>(j)];
+        outer[j + 1] = outer[j] + static_cast<Index>(r.size());
+        std::copy(r.begin(), r.end(), P.innerIndexPtr() + outer[j]);
+        std::copy(v.begin(), v.end(), P.valuePtr() + outer[j]);
+        std::vector<Index>().swap(r);
+        std::vector<double>().swap(v);
+    }
+    return P;
+}
+
+/// Whether X Y is cheaper through dense arithmetic, and fits.
+bool dense_product_pays(const SparseMatrix& X, const SparseMatrix& Y) {
+    const bool fits =
+        entries(X) <= kDenseProductMaxEntries && entries(Y) <= kDenseProductMaxEntries &&
+        static_cast<double>(X.rows()) * static_cast<double>(Y.cols()) <= kDenseProductMaxEntries;
+    return fits && kSparseFlopPenalty * sparse_product_flops(X, Y) >
+                       entries(X) * static_cast<double>(Y.cols());
+}
+
+/// X Y dense (exact zeros are not stored).
+SparseMatrix dense_product(const SparseMatrix& X, const SparseMatrix& Y) {
+    SparseMatrix out = Matrix(Matrix(X) * Matrix(Y)).sparseView(0.0, 0.0);
     out.makeCompressed();
     return out;
+}
+
+/// X Y by the cheaper of the sparse product and the dense one. Global solves make C̃ and A
+/// dense, localized solves keep them sparse: on a 24x8x8 hex grid with rho = 3 fine rings (C̃
+/// 10% dense), the dense A^1 = C̃ A C̃^T took 12 s and the sparse one 1.6 s, on a loaded
+/// machine.
+SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y) {
+    return dense_product_pays(X, Y) ? dense_product(X, Y) : sparse_product(X, Y, false);
+}
+
+/// M X M^T for symmetric X, exactly symmetric. The sparse path computes only the lower
+/// triangle of M (X M^T) and mirrors it.
+SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X) {
+    const SparseMatrix Mt = M.transpose();
+    const SparseMatrix XMt = product(X, Mt);
+    if (dense_product_pays(M, XMt)) {
+        const SparseMatrix P = dense_product(M, XMt);
+        SparseMatrix S = 0.5 * (P + SparseMatrix(P.transpose()));
+        S.makeCompressed();
+        return S;
+    }
+    const SparseMatrix L = sparse_product(M, XMt, true);
+    SparseMatrix S = L + SparseMatrix(L.transpose());
+    S.makeCompressed();
+    for (Index j = 0; j < S.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(S, j); it; ++it)
+            if (it.row() == j) it.valueRef() *= 0.5;
+    return S;
 }
 
 /// (M + M^T) / 2, compressed.
@@ -70,9 +173,13 @@ SparseMatrix symmetrized(const SparseMatrix& M) {
     return S;
 }
 
-/// M X M^T for symmetric X, exactly symmetric.
-SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X) {
-    return symmetrized(product(M, product(X, SparseMatrix(M.transpose()))));
+/// Φ^q: the selection of the present fine DOFs, #fine_dofs by fine grid DOFs.
+SparseMatrix fine_selection(const Hierarchy& h) {
+    SparseMatrix Phi(h.fine_dofs.size(), h.fine_grid_dofs());
+    std::vector<Triplet> t;
+    for (Index i = 0; i < h.fine_dofs.size(); ++i) t.emplace_back(i, h.fine_dofs[i], 1.0);
+    Phi.setFromTriplets(t.begin(), t.end());
+    return Phi;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -149,6 +256,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
               q - 1);
     for (const double r : options.radius)
         CG_VERIFY(r >= 1, "mra: radius {} must be at least 1 (or infinity)", r);
+    CG_VERIFY(options.patch >= 1, "mra: patch = {} must be at least 1", options.patch);
     CG_VERIFY(options.truncation >= 0 && options.truncation < 1,
               "mra: truncation = {} must be in [0, 1)", options.truncation);
     CG_VERIFY(options.penalty > 0, "mra: penalty = {} must be positive", options.penalty);
@@ -193,13 +301,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     std::vector<char> fixed_node(static_cast<std::size_t>(mesh.num_nodes()), 0);
     for (const Index d : fixed_dofs) fixed_node[static_cast<std::size_t>(d / dim)] = 1;
 
-    // Φ^q: selection of the present fine DOFs.
-    SparseMatrix Phi(h.fine_dofs.size(), n_dofs);
-    {
-        std::vector<Triplet> t;
-        for (Index k = 0; k < h.fine_dofs.size(); ++k) t.emplace_back(k, h.fine_dofs[k], 1.0);
-        Phi.setFromTriplets(t.begin(), t.end());
-    }
+    SparseMatrix Phi = options.store_bases ? fine_selection(h) : SparseMatrix();
 
     // Rigid motions on the present DOFs of the current finer level (invariance correction), in
     // units of the largest fine spacing.
@@ -258,7 +360,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             SparseMatrix Z;
             {
                 const Phase phase(tag + "Z (localized solves)", &h.timings);
-                Z = detail::localized_z(L.B, R, L.W, g, rings);
+                Z = detail::localized_z(L.B, R, L.W, g, rings, options.patch);
             }
             const Phase phase(tag + "C adapted", &h.timings);
             L.C_adapted = L.C_dagger + product(Z, L.W);
@@ -310,7 +412,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                                      dim == 3 ? fine_cells[2] + 1 : 1);
             const int reach = std::isinf(L.radius)
                                   ? nf.maxCoeff()
-                                  : rings + (options.refinement == Refinement::Linear ? 1 : 0);
+                                  : rings + 2 * (options.patch - 1) +
+                                        (options.refinement == Refinement::Linear ? 1 : 0);
             for (Index i = 0; i < coarse_nodes; ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)
@@ -342,17 +445,39 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             const Phase phase(tag + "A", &h.timings);
             L.A = congruence(L.C_adapted, A);
         }
-        {
+        if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);
             L.Psi = product(L.W, Phi);
             L.Phi = product(L.C_adapted, Phi);
+            Phi = L.Phi;
         }
         L.build_seconds = seconds_since(t0);
-        Phi = L.Phi;
         A_next = &L.A;
         dofs_next = L.dofs;
     }
     return h;
+}
+
+SparseMatrix basis(const Hierarchy& h, int k) {
+    const int q = h.num_levels();
+    CG_VERIFY(k >= 1 && k <= q, "mra: level {} out of range 1..{}", k, q);
+    if (k < q && h.options.store_bases) return h.level(k).Phi;
+    SparseMatrix Phi = fine_selection(h);
+    for (int l = q - 1; l >= k; --l) Phi = product(h.level(l).C_adapted, Phi);
+    return Phi;
+}
+
+Vector reconstruct(const Hierarchy& h, const Vector& u_k, int k) {
+    const int q = h.num_levels();
+    CG_VERIFY(k >= 1 && k <= q, "mra: level {} out of range 1..{}", k, q);
+    const Index n = k == q ? h.fine_dofs.size() : h.level(k).dofs.size();
+    CG_VERIFY(u_k.size() == n, "mra: {} coefficients for the {} DOFs of level {}", u_k.size(), n,
+              k);
+    Vector u = u_k;
+    for (int l = k; l < q; ++l) u = h.level(l).C_adapted.transpose() * u;
+    Vector out = Vector::Zero(h.fine_grid_dofs());
+    for (Index i = 0; i < h.fine_dofs.size(); ++i) out[h.fine_dofs[i]] = u[i];
+    return out;
 }
 
 Vector coarse_grain(const Hierarchy& h, const Vector& g_fine, int k) {

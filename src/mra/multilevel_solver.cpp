@@ -32,33 +32,39 @@ void MultilevelSolver::factorize_wavelets(int k) {
 Vector MultilevelSolver::solve_levels(const Vector& g_fine, int m) {
     const int q = m_h.num_levels();
     CG_VERIFY(m >= 1 && m <= q, "mra: number of levels {} out of range 1..{}", m, q);
+    // Coarse-graining g^k = C̃^k g^{k+1}, keeping W^k g^{k+1} for the wavelet solves.
+    std::vector<Vector> Wg(static_cast<std::size_t>(q - 1));
     Vector g = coarse_grain(m_h, g_fine, q);
-    Vector u = Vector::Zero(m_h.fine_grid_dofs());
     for (int k = q - 1; k >= 1; --k) {
         const Level& L = m_h.level(k);
-        if (k < m) {
-            factorize_wavelets(k);
-            const Vector w = m_B[static_cast<std::size_t>(k - 1)]->solve(Vector(L.W * g));
-            u += L.Psi.transpose() * w;
-        }
+        if (k < m) Wg[static_cast<std::size_t>(k - 1)] = L.W * g;
         g = L.C_adapted * g;
     }
+    // u = Φ^{1,T} v^1 + sum_{k<m} Ψ^{k,T} w^k, accumulated from the coarsest level:
+    // u^{k+1} = C̃^{k,T} u^k + W^{k,T} w^k, since Φ^k = C̃^k Φ^{k+1} and Ψ^k = W^k Φ^{k+1}.
     factorize_level(1);
-    u += m_h.level(1).Phi.transpose() * m_A[0]->solve(g);
-    return u;
+    Vector u = m_A[0]->solve(g);
+    for (int k = 1; k < q; ++k) {
+        const Level& L = m_h.level(k);
+        u = L.C_adapted.transpose() * u;
+        if (k < m) {
+            factorize_wavelets(k);
+            u += L.W.transpose() *
+                 m_B[static_cast<std::size_t>(k - 1)]->solve(Wg[static_cast<std::size_t>(k - 1)]);
+        }
+    }
+    return expand_fine(m_h, u);
 }
 
 Vector MultilevelSolver::solve_level(const Vector& g_fine, int k) {
     factorize_level(k);
     const Vector g = coarse_grain(m_h, g_fine, k);
-    const Vector v = m_A[static_cast<std::size_t>(k - 1)]->solve(g);
-    if (k == m_h.num_levels()) return expand_fine(m_h, v);
-    return m_h.level(k).Phi.transpose() * v;
+    return reconstruct(m_h, m_A[static_cast<std::size_t>(k - 1)]->solve(g), k);
 }
 
 Vector expand_fine(const Hierarchy& h, const Vector& u_present) {
-    CG_VERIFY(u_present.size() == h.fine_dofs.size(),
-              "mra: {} values for {} fine DOFs", u_present.size(), h.fine_dofs.size());
+    CG_VERIFY(u_present.size() == h.fine_dofs.size(), "mra: {} values for {} fine DOFs",
+              u_present.size(), h.fine_dofs.size());
     Vector u = Vector::Zero(h.fine_grid_dofs());
     for (Index i = 0; i < h.fine_dofs.size(); ++i) u[h.fine_dofs[i]] = u_present[i];
     return u;

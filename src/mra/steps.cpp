@@ -1,7 +1,9 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <exception>
+#include <map>
 #include <mutex>
 
 #include "coarsegrain/common/error.hpp"
@@ -21,20 +23,38 @@ constexpr Index kGlobalBlock = 64;
 
 /// Loops shorter than these run on one thread: waking a second thread costs ~20 ms on a loaded
 /// machine (measured: an 18x18 factorization took 24 ms with 2 threads, 0.1 ms with one).
+/// kMinParallelNodes counts regions of localized solves.
 constexpr Index kMinParallelNodes = 64;
 constexpr Index kMinParallelColumns = 4096;
 
-/// Local systems up to this size are factorized densely (LLT), larger ones by a sparse Cholesky
-/// with AMD ordering.
+/// Local systems up to kDenseLocalLimit unknowns, or up to kDenseLocalMax with more than
+/// kDenseLocalDensity of their entries nonzero, are factorized densely (blocked LLT), others by
+/// a sparse Cholesky with AMD ordering. Measured on the 64x16x16 accordion, rho = 2 fine rings,
+/// loaded machine: the systems of the fine step (~1000 wavelets) took 45 s sparse and 61 s
+/// dense, those of the coarse step (B^1 27% dense) 30 s sparse and under 1 s dense. CHOLMOD
+/// (solve::SpdSolver, supernodal) took 4x longer than the simplicial factorization on such
+/// systems (32x8x8 accordion: 16 s against 4 s) but pays from kSupernodalLocalMin unknowns
+/// (20x10x10 checker, rho = 5, regions of ~4000 wavelets: 18-20 s against 26 s, load ~8).
 constexpr Index kDenseLocalLimit = 400;
+constexpr Index kDenseLocalMax = 4000;
+constexpr double kDenseLocalDensity = 0.25;
+constexpr Index kSupernodalLocalMin = 2500;
 
 /// Solves b x = rhs for a local SPD matrix b (compressed, both triangles).
 Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
-    if (b.rows() <= kDenseLocalLimit) {
+    const double n = static_cast<double>(b.rows());
+    if (b.rows() <= kDenseLocalLimit ||
+        (b.rows() <= kDenseLocalMax &&
+         static_cast<double>(b.nonZeros()) > kDenseLocalDensity * n * n)) {
         const Eigen::LLT<Matrix> llt(Matrix(b).selfadjointView<Eigen::Lower>());
         CG_VERIFY(llt.info() == Eigen::Success,
                   "mra: a local wavelet stiffness (n = {}) is not positive definite", b.rows());
         return llt.solve(rhs);
+    }
+    if (b.rows() >= kSupernodalLocalMin) {
+        solve::SpdSolver solver;
+        solver.compute(b);
+        return solver.solve(rhs);
     }
     Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>> llt(b);
     CG_VERIFY(llt.info() == Eigen::Success,
@@ -73,8 +93,44 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
     return Ct;
 }
 
+namespace {
+
+/// A box of level-(k+1) nodes (inclusive grid coordinates) and the coarse nodes (indices into
+/// the node list of localized_z) whose rows of Z are solved on it.
+struct Region {
+    Eigen::Vector3i lo, hi;
+    std::vector<Index> members;
+};
+
+/// Regions of the localized solves: per patch of coarse nodes, the fine nodes within `rings` of
+/// the patch's nodes, clipped to the grid; patches whose boxes coincide are merged.
+std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeometry& g, int rings,
+                                  int patch) {
+    const int dim = g.dim;
+    const Eigen::Vector3i nf(g.fine_cells[0] + 1, g.fine_cells[1] + 1,
+                             dim == 3 ? g.fine_cells[2] + 1 : 1);
+    const Eigen::Vector3i nc(g.coarse_cells[0] + 1, g.coarse_cells[1] + 1,
+                             dim == 3 ? g.coarse_cells[2] + 1 : 1);
+    std::map<std::array<int, 6>, std::size_t> index;
+    std::vector<Region> regions;
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+        const Eigen::Vector3i c = node_coordinates(nodes[n], g.coarse_cells, dim);
+        const Eigen::Vector3i first = (c.array() / patch) * patch;
+        const Eigen::Vector3i last = (first.array() + patch - 1).min(nc.array() - 1);
+        const Eigen::Vector3i lo = (2 * first.array() - rings).max(0);
+        const Eigen::Vector3i hi = (2 * last.array() + rings).min(nf.array() - 1);
+        const std::array<int, 6> key{lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
+        const auto [it, added] = index.emplace(key, regions.size());
+        if (added) regions.push_back({lo, hi, {}});
+        regions[it->second].members.push_back(static_cast<Index>(n));
+    }
+    return regions;
+}
+
+}  // namespace
+
 SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
-                         const StepGeometry& g, int rings) {
+                         const StepGeometry& g, int rings, int patch) {
     const int dim = g.dim;
     const Index nw = static_cast<Index>(W.rows());
     const Eigen::Vector3i nf(g.fine_cells[0] + 1, g.fine_cells[1] + 1,
@@ -94,27 +150,25 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
         }
     }
     first.push_back(static_cast<Index>(g.coarse_dofs.size()));
-    const Index num_nodes = static_cast<Index>(nodes.size());
+    const std::vector<Region> regions = patch_regions(nodes, g, rings, patch);
+    const Index num_regions = static_cast<Index>(regions.size());
 
-    std::vector<std::vector<Triplet>> parts(static_cast<std::size_t>(num_nodes));
+    std::vector<std::vector<Triplet>> parts(static_cast<std::size_t>(num_regions));
     std::exception_ptr error;
     std::mutex mutex;
-#pragma omp parallel if (num_nodes >= kMinParallelNodes)
+#pragma omp parallel if (num_regions >= kMinParallelNodes)
     {
         std::vector<Index> local(static_cast<std::size_t>(nw), -1);
         std::vector<Index> S;
-#pragma omp for schedule(dynamic, 4)
-        for (Index n = 0; n < num_nodes; ++n) {
+#pragma omp for schedule(dynamic, 1)
+        for (Index n = 0; n < num_regions; ++n) {
             try {
                 // S: wavelets with a nonzero on a fine node of the region.
-                const Eigen::Vector3i c =
-                    2 * node_coordinates(nodes[static_cast<std::size_t>(n)], g.coarse_cells, dim);
-                const Eigen::Vector3i lo = (c.array() - rings).max(0);
-                const Eigen::Vector3i hi = (c.array() + rings).min(nf.array() - 1);
+                const Region& region = regions[static_cast<std::size_t>(n)];
                 S.clear();
-                for (int z = lo[2]; z <= (dim == 3 ? hi[2] : 0); ++z)
-                    for (int y = lo[1]; y <= hi[1]; ++y)
-                        for (int x = lo[0]; x <= hi[0]; ++x) {
+                for (int z = region.lo[2]; z <= region.hi[2]; ++z)
+                    for (int y = region.lo[1]; y <= region.hi[1]; ++y)
+                        for (int x = region.lo[0]; x <= region.hi[0]; ++x) {
                             const Index v = x + nf[0] * (y + nf[1] * z);
                             for (int d = 0; d < dim; ++d) {
                                 const Index l = fine_local[static_cast<std::size_t>(dim * v + d)];
@@ -132,7 +186,7 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
                 const Index ns = static_cast<Index>(S.size());
                 for (Index s = 0; s < ns; ++s) local[static_cast<std::size_t>(S[s])] = s;
 
-                // b = B[S, S] and the right-hand sides R[S, DOFs of the node].
+                // b = B[S, S] and the right-hand sides R[S, DOFs of the region's nodes].
                 SparseMatrix b(ns, ns);
                 std::vector<Triplet> bt;
                 for (Index s = 0; s < ns; ++s)
@@ -142,11 +196,16 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
                         if (r >= 0) bt.emplace_back(r, s, it.value());
                     }
                 b.setFromTriplets(bt.begin(), bt.end());
-                const Index r0 = first[static_cast<std::size_t>(n)];
-                const Index nr = first[static_cast<std::size_t>(n) + 1] - r0;
+                std::vector<Index> rows;
+                for (const Index m : region.members)
+                    for (Index r = first[static_cast<std::size_t>(m)];
+                         r < first[static_cast<std::size_t>(m) + 1]; ++r)
+                        rows.push_back(r);
+                const Index nr = static_cast<Index>(rows.size());
                 Matrix rhs = Matrix::Zero(ns, nr);
                 for (Index q = 0; q < nr; ++q)
-                    for (SparseMatrix::InnerIterator it(R, r0 + q); it; ++it) {
+                    for (SparseMatrix::InnerIterator it(R, rows[static_cast<std::size_t>(q)]); it;
+                         ++it) {
                         const Index r = local[static_cast<std::size_t>(it.row())];
                         if (r >= 0) rhs(r, q) = it.value();
                     }
@@ -158,7 +217,8 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
                 for (Index q = 0; q < nr; ++q)
                     for (Index s = 0; s < ns; ++s)
                         if (x(s, q) != 0.0)
-                            part.emplace_back(r0 + q, S[static_cast<std::size_t>(s)], -x(s, q));
+                            part.emplace_back(rows[static_cast<std::size_t>(q)],
+                                              S[static_cast<std::size_t>(s)], -x(s, q));
             } catch (...) {
                 const std::lock_guard<std::mutex> lock(mutex);
                 if (!error) error = std::current_exception();

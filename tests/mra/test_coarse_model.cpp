@@ -70,7 +70,7 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         for (Index a = 0; a < h.level(1).dofs.size(); ++a)
             t_coarse[h.level(1).dofs[a]] = h.level(1).dofs[a] % 2 == 0 ? 1.0 : 0.0;
         const Vector via_model = m.to_fine * t_coarse;
-        const Vector via_basis = h.level(1).Phi.transpose() * measured;
+        const Vector via_basis = reconstruct(h, measured, 1);
         // Division and multiplication by the same power-of-two sums: 1e-14.
         EXPECT_LT((via_model - via_basis).cwiseAbs().maxCoeff(), 1e-14) << refinement;
     }
@@ -82,13 +82,14 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.refinement, Refinement::Linear);
     EXPECT_TRUE(std::isinf(d.radius.at(0)));
     EXPECT_EQ(d.radius_grid, RadiusGrid::Fine);
+    EXPECT_EQ(d.patch, 1);
     EXPECT_EQ(d.truncation, 1e-7);
     EXPECT_TRUE(d.invariance);
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
     const Options o =
         parse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
-                        "radius_grid": "coarse", "truncation": 1e-5, "invariance": false,
-                        "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
+                        "radius_grid": "coarse", "patch": 2, "truncation": 1e-5,
+                        "invariance": false, "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
                       "t");
     EXPECT_EQ(o.levels, 4);
     EXPECT_EQ(o.refinement, Refinement::Dirac);
@@ -97,6 +98,7 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_TRUE(std::isinf(o.radius[1]));
     EXPECT_EQ(o.radius[2], 3.5);
     EXPECT_EQ(o.radius_grid, RadiusGrid::Coarse);
+    EXPECT_EQ(o.patch, 2);
     EXPECT_EQ(o.truncation, 1e-5);
     EXPECT_FALSE(o.invariance);
     EXPECT_EQ(o.dirichlet, DirichletTreatment::DiagonalPenalty);
@@ -115,6 +117,7 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
         {R"({"levels": 3, "radius": [2, 3, 4]})", "coarse.radius: expected levels - 1 = 2"},
         {R"({"radius": [2, "x"]})", "coarse.radius[1]"},
         {R"({"radius_grid": "medium"})", "coarse.radius_grid"},
+        {R"({"patch": 0})", "coarse.patch"},
         {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
         {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},
         {R"({"dirichlet": "clamp"})", "coarse.dirichlet: expected \"constrain\""},

@@ -60,6 +60,7 @@ TEST(MraDiagnostics, ErrorSparsityAndStorage) {
     o.levels = 3;
     o.radius = {1};
     o.truncation = 1e-3;
+    o.store_bases = true;
     const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
     const Diagnostics d = diagnose(h, p.f);
     const LevelDiagnostics& fine = d.levels.back();

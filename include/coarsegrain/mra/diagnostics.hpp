@@ -29,6 +29,8 @@ struct LevelDiagnostics {
     /// Fraction of zero entries (1 - stored nonzeros / (rows * cols)); explicitly stored zeros
     /// count as zeros. sparsity_C is of C̃^k (NaN at level q).
     double sparsity_A = 0, sparsity_B = 0, sparsity_C = 0;
+    /// Storage (storage_bytes); Φ^k and Ψ^k only where kept (Options::store_bases), else the
+    /// few bytes of an empty matrix.
     std::size_t bytes_Phi = 0, bytes_Psi = 0, bytes_C = 0, bytes_A = 0, bytes_B = 0;
     double build_seconds = 0;  ///< Level::build_seconds (0 at level q, which is not built)
     /// The spectrum of A^k or B^k was not computed: more rows than max_spectrum_dofs, or

@@ -4,7 +4,8 @@
 ///
 /// Notation (shared/papers/NOTES.md): canonical quantities C^k, W^k, C^{k,†}; material-adapted
 /// refinement C̃^k (the paper's outline C^k), stiffness A^k, wavelet stiffness B^k, basis Φ^k and
-/// wavelets Ψ^k, all stored against the finest basis (Φ^q = I). Level 1 is the coarsest, level q
+/// wavelets Ψ^k, expressed against the finest basis (Φ^q = I) and kept only on request
+/// (Options::store_bases; basis() and reconstruct() otherwise). Level 1 is the coarsest, level q
 /// the finest; step k builds level k from level k+1.
 ///
 /// ## Dirichlet conditions (DirichletTreatment)
@@ -75,6 +76,53 @@
 /// paid in 3D: on a 24x12x12 hex grid C̃ stays 63% dense and A^1 dense (bench/bench_mra), so
 /// localized radii (with per-step values, e.g. global for the coarse steps) remain the option
 /// for large 3D models, at a much larger error.
+///
+/// ## Cost in 3D (bench/bench_mra)
+/// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
+/// clamped at x = 0, gravity), hex grids, 3 levels (coarsest = grid / 4), truncation 1e-7,
+/// invariance correction, rho in fine rings, patch 1, OMP_NUM_THREADS=2 on a 2-core machine
+/// loaded by 2-3 other jobs (times vary by 1.5x between runs). build = build_hierarchy; peak =
+/// process high-water mark (includes the fine problem and its CHOLMOD solve, ~500 MB at
+/// 64x16x16); speedup = fine factorize + solve over coarsest factorize + solve.
+///
+/// | grid     | refinement, rho | build s | peak MB | coarsest error | speedup |
+/// |----------|-----------------|---------|---------|----------------|---------|
+/// | 32x8x8   | linear, global  | 16.0    | 612     | 0.0029         | 37x     |
+/// | 32x8x8   | Dirac, global   | 7.9     | 350     | 0.0156         | 121x    |
+/// | 32x8x8   | linear, 2       | 5.0     | 136     | 0.999          | 40x     |
+/// | 32x8x8   | Dirac, 2        | 0.8     | 80      | 0.977          | 77x     |
+/// | 32x8x8   | Dirac, 1        | 0.7     | 69      | 0.81           | 254x    |
+/// | 48x12x12 | linear, 2       | 27.5    | 514     | 0.994          | 22x     |
+/// | 48x12x12 | Dirac, 2        | 2.7     | 278     | 0.978          | 69x     |
+/// | 48x12x12 | Dirac, 1        | 2.6     | 231     | 0.984          | 102x    |
+/// | 64x16x16 | linear, 2       | 78.6    | 1156    | 0.990          | 15x     |
+/// | 64x16x16 | linear, 1       | 6.2     | 811     | 1.000          | 73x     |
+/// | 64x16x16 | Dirac, 2        | 12.3    | 696     | 0.987          | 28x     |
+/// | 64x16x16 | Dirac, 1        | 2.3     | 619     | 0.61           | 196x    |
+///
+/// Builds are fast now, but on this cantilever every small radius fails: a coarsest error of
+/// 0.6-1.0 means the coarse model hardly moves (locking), against 0.003 for global solves.
+/// Larger regions do not help either within 20 s: on 32x8x8 with Dirac refinement, global solves
+/// at the coarse step and rho = 2 / 4 / 6 at the fine step gave 0.92 / 0.81 / 0.39 (2 s, 19 s,
+/// 21 s), and rho = 1 with patch 2 0.87. The errors do not even decrease monotonically with
+/// the grid or the radius. It is the amplification described above: the beam's large, smooth
+/// bending displacement needs basis functions exact to ~1e-5, which only regions spanning the
+/// beam give. Against the previous implementation (Galerkin products dense above 5% density,
+/// simplicial local solves, Φ^k and Ψ^k kept), same C̃ and errors, checker bench problem:
+/// 24x8x8, 2 levels, rho = 3: 30 s -> 3.2 s (180 MB); 16x8x8, 3 levels, rho = 5:
+/// 30 s / 171 MB -> 9.0 s / 132 MB. Large regions stay expensive: 40x20x20, 3 levels, rho = 5
+/// (regions of ~4000 wavelets per coarse node at the fine step, ~6000 and 54% dense at the
+/// coarse one) was 359 s / 880 MB and took 409 s / 2.07 GB here (error 0.690; the local
+/// factorizations are 85% of the time; where the peak memory goes was not analysed).
+///
+/// Where the time went (perf, 24x8x8 checker, rho = 3): dense Galerkin products and their page
+/// faults (55%), then the sparse local factorizations (18%). Now the products pick sparse or
+/// dense by their multiply-add count (sparse Gustavson, parallel, lower triangle only for
+/// A^k), and localized solves dominate: the sparse factorizations of the fine step's regions
+/// (64x16x16, linear, rho = 2: 39 s of 67 s) and the products with the dense A^2 of the coarse
+/// step. Patches (Options::patch) trade fewer factorizations for larger regions and a denser C̃:
+/// patch 2 on that case cut the fine step's solves from 39 s to 27 s but doubled C̃ and raised
+/// the time of A^2 from 4 s to 22 s, for the same error (0.988).
 #include <limits>
 #include <string>
 #include <vector>
@@ -111,6 +159,13 @@ struct Options {
     /// factorization of B^k for all columns of Z).
     std::vector<double> radius = {std::numeric_limits<double>::infinity()};
     RadiusGrid radius_grid = RadiusGrid::Fine;
+    /// Patch-wise localization (finite radii only): coarse nodes per axis of a patch. The
+    /// nodes of a patch (a block of patch^dim coarse nodes) share one region, the fine nodes
+    /// within rho rings of any of them, and one factorization of B^k on it for all their
+    /// columns. 1: the paper's per-node regions. A larger patch enlarges every node's region
+    /// (at least as accurate as patch 1 with the same rho) and divides the number of
+    /// factorizations by patch^dim.
+    int patch = 1;
     /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, an entry
     /// C̃_ij is dropped if |C̃_ij| < tau max_l |C̃_il| (relative to the largest coefficient of
     /// the same basis function). A^k = C̃^k A^{k+1} C̃^{k,T} is then the exact Galerkin matrix of
@@ -125,6 +180,10 @@ struct Options {
     DirichletTreatment dirichlet = DirichletTreatment::Constrain;
     /// Penalty / DiagonalPenalty magnitude (absolute, or relative to K_ii).
     double penalty = 1e8;
+    /// Keep Φ^k and Ψ^k (against the finest grid) in every Level. Off by default: they hold
+    /// more entries than all C̃^k together (128x128 quads, 3 levels: 12 GB), and basis() and
+    /// reconstruct() give Φ^k and Φ^{k,T} u^k on demand from the C̃^k.
+    bool store_bases = false;
 };
 
 /// One level k < q of the hierarchy, built from level k+1 (Algorithm 1, lines 2-7).
@@ -141,9 +200,9 @@ struct Level {
     SparseMatrix C_adapted;  ///< C̃^k = C^{k,†} + Z W^k (Eq. 11), localized/corrected/truncated
     SparseMatrix A;          ///< A^k = C̃^k A^{k+1} C̃^{k,T} (Alg. 1 line 7)
     SparseMatrix B;          ///< B^k = W^k A^{k+1} W^{k,T} (Alg. 1 line 2)
-    SparseMatrix Phi;        ///< Φ^k = C̃^k Φ^{k+1}: #dofs by fine grid DOFs
-    SparseMatrix Psi;        ///< Ψ^k = W^k Φ^{k+1}: #wavelets by fine grid DOFs
-    double radius = 0;       ///< rho used for this step
+    SparseMatrix Phi;  ///< Φ^k = C̃^k Φ^{k+1}: #dofs by fine grid DOFs (if store_bases, else 0x0)
+    SparseMatrix Psi;   ///< Ψ^k = W^k Φ^{k+1}: #wavelets by fine grid DOFs (if store_bases)
+    double radius = 0;  ///< rho used for this step
     /// Per node of level k+1: 1 if the invariance correction was applied to its columns of C̃.
     std::vector<char> invariance_applied;
     /// Per node of level k: 1 if it lies on a fixed node of the finest grid. The invariance
@@ -189,6 +248,16 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
 /// Restricts a fine vector (fine grid DOFs) to the hierarchy's fine DOFs and coarse-grains it to
 /// level k (Sec. 3.6): g^k = C̃^k ... C̃^{q-1} g^q.
 Vector coarse_grain(const Hierarchy& h, const Vector& g_fine, int k);
+
+/// Φ^k = C̃^k ... C̃^{q-1} Φ^q (#dofs of level k by fine grid DOFs; k = q: the selection of the
+/// present fine DOFs): the stored one if Options::store_bases, else computed.
+/// @throws Error if k is not in 1..q
+SparseMatrix basis(const Hierarchy& h, int k);
+
+/// Φ^{k,T} u^k over all fine grid DOFs, computed level by level as
+/// u^{l+1} = C̃^{l,T} u^l for l = k..q-1 (zeros at eliminated DOFs), without Φ^k.
+/// @throws Error if k is not in 1..q or u_k has the wrong size
+Vector reconstruct(const Hierarchy& h, const Vector& u_k, int k);
 
 /// Bytes of a compressed sparse matrix (values, inner and outer indices).
 std::size_t storage_bytes(const SparseMatrix& M);
