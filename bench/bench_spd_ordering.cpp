@@ -1,9 +1,11 @@
 // Phases of the fine static solve of bench/ccx_vs_coarsegrain.py's problem (a layered
 // 48x18x18 hex box, 52K free DOFs): CHOLMOD analyze, factorize and solve, with CHOLMOD's
 // default ordering (node_dofs = 1: AMD, then METIS on the DOF matrix) and with the ordering of
-// the node graph (node_dofs = 3). Counters: nnz(L) and the factorization's flops.
-//   bench_spd_ordering [--benchmark_filter=Node]
+// the node graph (node_dofs = 3); the factorization also with 1 and 2 threads (OpenMP, which
+// the solver passes on to OpenBLAS). Counters: nnz(L) and the factorization's flops.
+//   bench_spd_ordering [--benchmark_filter=Factorize]
 #include <benchmark/benchmark.h>
+#include <omp.h>
 
 #include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/scene/scene.hpp"
@@ -69,7 +71,10 @@ void BM_Factorize(benchmark::State& state) {
     const auto& sys = ccx_system();
     cg::solve::SpdSolver solver = make_solver(static_cast<int>(state.range(0)));
     solver.analyze(sys.K);
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(static_cast<int>(state.range(1)));
     for (auto _ : state) solver.factorize(sys.K);
+    omp_set_num_threads(threads);
     stats_counters(state, solver);
 }
 
@@ -90,9 +95,10 @@ BENCHMARK(BM_Analyze)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Factorize)
-    ->ArgName("node_dofs")
-    ->Arg(1)
-    ->Arg(3)
+    ->ArgNames({"node_dofs", "threads"})
+    ->Args({1, 1})
+    ->Args({3, 1})
+    ->Args({3, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Solve)
