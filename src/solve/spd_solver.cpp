@@ -122,8 +122,8 @@ std::vector<Index> column_groups(const SparseMatrix& A, int max_size) {
 /// Fill-reducing ordering of A computed on its quotient graph: one vertex per column group
 /// (a node), an edge where A has an entry between two groups. CHOLMOD tries AMD and METIS
 /// nested dissection on that graph, which has about (n / #groups)^2 times fewer edges than A,
-/// and keeps the one with fewer flops; each group is then expanded to its columns, in order.
-/// Returns the permutation (new column k = old perm[k]) and the name of the graph ordering.
+/// and keeps the one with the smaller factor nnz(L); each group is then expanded to its columns, in
+/// order. Returns the permutation (new column k = old perm[k]) and the name of the graph ordering.
 std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
                                                         const std::vector<Index>& start) {
     const Index groups = static_cast<Index>(start.size()) - 1;

@@ -24,8 +24,8 @@ struct SolverOptions {
     int cg_max_iterations = 0;    ///< 0: 10 * n
     /// Unknowns per node when A is interleaved per node (dim for elasticity: x0 y0 z0 x1 ...).
     /// With node_dofs > 1, cholmod computes its fill-reducing ordering on the graph of nodes
-    /// (about node_dofs^2 times fewer edges than A; CHOLMOD's AMD and METIS, whichever needs
-    /// fewer flops), then expands each node to its unknowns. A node is a run of at most
+    /// (about node_dofs^2 times fewer edges than A; CHOLMOD's AMD and METIS, whichever gives
+    /// the smaller factor), then expands each node to its unknowns. A node is a run of at most
     /// node_dofs consecutive columns with identical patterns, so nodes with components removed
     /// by Dirichlet conditions are fine. If A has no such runs (or node_dofs = 1) CHOLMOD's
     /// default ordering is used: AMD, then METIS on A itself when AMD's fill is large.
