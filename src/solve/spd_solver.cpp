@@ -338,11 +338,12 @@ namespace {
 // factorization its thread count is set to OpenMP's (omp_get_max_threads: --threads or
 // OMP_NUM_THREADS, else all cores), unless the user set OPENBLAS_NUM_THREADS. The two pools take
 // turns (no OpenMP region runs inside a factorization), so they do not oversubscribe the cores.
-// OpenBLAS threads also spin while waiting for work: on a machine whose cores are all busy with
-// other jobs, 2 BLAS threads made the 56K-DOF demo's factorization 5-10x slower than one
-// (24-49 s against 4.7 s, ctest -j), so such runs should pass --threads 1. On an idle 2-core
-// machine 2 threads factorize bench/ccx_vs_coarsegrain.py's problem in 0.65 times the time of
-// one (2.56 s against 3.93 s). Other BLAS libraries (no openblas_set_num_threads symbol) are
+// On an idle 2-core machine, 2 threads took the factorize phase of bench/ccx_vs_coarsegrain.py's
+// problem from 3.93 s to 2.56 s. OpenBLAS threads spin while they wait for work, and each BLAS
+// call waits for its slowest thread: on a machine whose cores are busy with other jobs 2 threads
+// are slower than one (that factorization, load average 6 on 2 cores: median 4.3 s against
+// 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s against 4.7 s), so such
+// runs should pass --threads 1. Other BLAS libraries (no openblas_set_num_threads symbol) are
 // left alone.
 void match_blas_threads() {
     static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
