@@ -80,7 +80,7 @@ class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
     /// nnz(L) and the flop count of the factorization, from the last analysis.
     double factor_nonzeros() { return cholmod().lnz; }
     double factor_flops() { return cholmod().fl; }
-    /// Name of the ordering CHOLMOD selected in its last analysis.
+    /// CHOLMOD's code (CHOLMOD_AMD, ...) of the ordering selected by its last analysis.
     int selected_ordering() { return cholmod().method[cholmod().selected].ordering; }
 };
 
@@ -337,9 +337,11 @@ namespace {
 // own thread pool, which by default would use every core even with --threads 1; so before each
 // factorization its thread count is set to OpenMP's (omp_get_max_threads: --threads or
 // OMP_NUM_THREADS, else all cores), unless the user set OPENBLAS_NUM_THREADS. The two pools take
-// turns (no OpenMP region runs inside a factorization), so they do not oversubscribe the cores.
+// turns: no OpenMP region runs inside a factorization, and idle OpenBLAS threads spin for at
+// most about 0.1 s (2^28 cycles, OpenBLAS's default) before sleeping.
 // On an idle 2-core machine, 2 threads took the factorize phase of bench/ccx_vs_coarsegrain.py's
-// problem from 3.93 s to 2.56 s. OpenBLAS threads spin while they wait for work, and each BLAS
+// problem from 3.93 s to 2.56 s (an earlier measurement on the 56K-DOF demo found one thread as
+// fast: 2.0 s against 2.0-2.2 s). OpenBLAS threads spin while they wait for work, and each BLAS
 // call waits for its slowest thread: on a machine whose cores are busy with other jobs 2 threads
 // are slower than one (that factorization, load average 6 on 2 cores: median 4.3 s against
 // 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s against 4.7 s), so such
