@@ -347,9 +347,8 @@ namespace {
 // 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s against 4.7 s), so such
 // runs should pass --threads 1. The OpenMP build of OpenBLAS (libopenblas0-openmp, which would
 // share coarsegrain's OpenMP pool) is not a cure: under the same load its 2-thread
-// factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads build.
-// Other BLAS libraries (no openblas_set_num_threads symbol) are
-// left alone.
+// factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads build. Other
+// BLAS libraries (no openblas_set_num_threads symbol) are left alone.
 void match_blas_threads() {
     static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
     if (user_set) return;
