@@ -337,7 +337,9 @@ FineModel build_fine_model(const Scene& scene, Timings* timings) {
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
                             Timings* timings) {
     const fem::ReducedSystem sys = fem::reduce(model.K, model.f, model.bc);
-    solve::SpdSolver solver(options);
+    solve::SolverOptions node_options = options;
+    node_options.node_dofs = model.mesh.dim();  // K is interleaved per node
+    solve::SpdSolver solver(node_options);
     {
         const Phase phase("factorize", timings);
         solver.compute(sys.K);

@@ -1,15 +1,18 @@
 #include "coarsegrain/solve/spd_solver.hpp"
 
 #include <dlfcn.h>
+#include <omp.h>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <mutex>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "coarsegrain/common/error.hpp"
 
@@ -43,10 +46,25 @@ constexpr double kSingularEigenvalueRatio = 1e-14;
 constexpr const char* kDirichletHint =
     "is the structure held by enough Dirichlet conditions to remove its rigid motions?";
 
-// Eigen's supernodal CHOLMOD wrapper, opened up for CHOLMOD's factor and status.
+// Eigen's supernodal CHOLMOD wrapper, opened up for CHOLMOD's factor and status, and for a
+// symbolic analysis with a given fill-reducing permutation.
 class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> {
   public:
     CholmodFactor() { cholmod().print = 0; }  // failures are reported by our own exceptions
+    /// analyzePattern with the fill-reducing permutation `perm` (new column k = old perm[k]),
+    /// followed by CHOLMOD's elimination-tree postorder.
+    void analyze_permuted(const SparseMatrix& A, std::vector<int>& perm) {
+        if (m_cholmodFactor) cholmod_free_factor(&m_cholmodFactor, &cholmod());
+        cholmod_sparse view = Eigen::viewAsCholmod(A.selfadjointView<Eigen::Lower>());
+        cholmod().nmethods = 1;
+        cholmod().method[0].ordering = CHOLMOD_GIVEN;
+        cholmod().postorder = 1;
+        m_cholmodFactor = cholmod_analyze_p(&view, perm.data(), nullptr, 0, &cholmod());
+        m_isInitialized = true;
+        m_info = Eigen::Success;
+        m_analysisIsOk = true;
+        m_factorizationIsOk = false;
+    }
     bool has_factor() const { return m_cholmodFactor != nullptr; }
     /// Column at which the factorization stopped (n on success).
     Index minor() const { return static_cast<Index>(m_cholmodFactor->minor); }
@@ -54,7 +72,110 @@ class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
     int status() { return cholmod().status; }
     /// (min diag L / max diag L)^2.
     double rcond() { return cholmod_rcond(m_cholmodFactor, &cholmod()); }
+    /// Fill-reducing permutation of the analysis (new column k = old permutation[k]).
+    IndexVector permutation() const {
+        const int* perm = static_cast<const int*>(m_cholmodFactor->Perm);
+        return Eigen::Map<const IndexVector>(perm, static_cast<Index>(m_cholmodFactor->n));
+    }
+    /// nnz(L) and the flop count of the factorization, from the last analysis.
+    double factor_nonzeros() { return cholmod().lnz; }
+    double factor_flops() { return cholmod().fl; }
+    /// CHOLMOD's code (CHOLMOD_AMD, ...) of the ordering selected by its last analysis.
+    int selected_ordering() { return cholmod().method[cholmod().selected].ordering; }
 };
+
+std::string ordering_name(int ordering) {
+    switch (ordering) {
+        case CHOLMOD_NATURAL:
+            return "natural";
+        case CHOLMOD_AMD:
+            return "amd";
+        case CHOLMOD_METIS:
+            return "metis";
+        case CHOLMOD_NESDIS:
+            return "nesdis";
+        case CHOLMOD_COLAMD:
+            return "colamd";
+        default:
+            return "given";
+    }
+}
+
+/// Offsets of A's column groups (size #groups + 1): maximal runs of at most `max_size`
+/// consecutive columns with identical row patterns. In an interleaved FEM matrix these are the
+/// nodes (a node with components eliminated by Dirichlet conditions gives a shorter run).
+std::vector<Index> column_groups(const SparseMatrix& A, int max_size) {
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const auto same_pattern = [&](Index a, Index b) {
+        return outer[a + 1] - outer[a] == outer[b + 1] - outer[b] &&
+               std::equal(inner + outer[a], inner + outer[a + 1], inner + outer[b]);
+    };
+    std::vector<Index> start{0};
+    const Index n = static_cast<Index>(A.cols());
+    for (Index j = 1; j < n; ++j)
+        if (j - start.back() >= max_size || !same_pattern(start.back(), j)) start.push_back(j);
+    start.push_back(n);
+    return start;
+}
+
+/// Fill-reducing ordering of A computed on its quotient graph: one vertex per column group
+/// (a node), an edge where A has an entry between two groups. CHOLMOD tries AMD and METIS
+/// nested dissection on that graph, which has about (n / #groups)^2 times fewer edges than A,
+/// and keeps the one with the smaller factor nnz(L); each group is then expanded to its columns, in
+/// order. Returns the permutation (new column k = old perm[k]) and the name of the graph ordering.
+std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
+                                                        const std::vector<Index>& start) {
+    const Index groups = static_cast<Index>(start.size()) - 1;
+    std::vector<Index> group_of(A.cols());
+    for (Index g = 0; g < groups; ++g)
+        std::fill(group_of.begin() + start[g], group_of.begin() + start[g + 1], g);
+    // Lower triangle of the quotient graph: the rows of each group's first column (every column
+    // of a group has the same pattern), mapped to groups; sorted rows give sorted groups.
+    std::vector<int> p{0}, rows;
+    rows.reserve(static_cast<std::size_t>(A.nonZeros() / std::max<Index>(1, A.cols() / groups)));
+    for (Index g = 0; g < groups; ++g) {
+        for (SparseMatrix::InnerIterator it(A, start[g]); it; ++it) {
+            const Index h = group_of[it.row()];
+            if (h >= g && (static_cast<int>(rows.size()) == p.back() || rows.back() != h))
+                rows.push_back(h);
+        }
+        p.push_back(static_cast<int>(rows.size()));
+    }
+    cholmod_sparse graph{};
+    graph.nrow = graph.ncol = static_cast<std::size_t>(groups);
+    graph.nzmax = rows.size();
+    graph.p = p.data();
+    graph.i = rows.data();
+    graph.stype = -1;
+    graph.itype = CHOLMOD_INT;
+    graph.xtype = CHOLMOD_PATTERN;
+    graph.dtype = CHOLMOD_DOUBLE;
+    graph.sorted = 1;
+    graph.packed = 1;
+
+    cholmod_common common;
+    cholmod_start(&common);
+    common.print = 0;
+    common.nmethods = 2;
+    common.method[0].ordering = CHOLMOD_AMD;
+    common.method[1].ordering = CHOLMOD_METIS;
+    common.supernodal = CHOLMOD_SIMPLICIAL;  // only the ordering is wanted
+    cholmod_factor* L = cholmod_analyze(&graph, &common);
+    CG_VERIFY(L != nullptr,
+              "solver (cholmod): ordering the graph of {} nodes failed (CHOLMOD status {}; out of "
+              "memory?)",
+              groups, common.status);
+    const int* group_perm = static_cast<const int*>(L->Perm);
+    std::vector<int> perm;
+    perm.reserve(A.cols());
+    for (Index k = 0; k < groups; ++k)
+        for (Index j = start[group_perm[k]]; j < start[group_perm[k] + 1]; ++j) perm.push_back(j);
+    std::string name = ordering_name(common.method[common.selected].ordering);
+    cholmod_free_factor(&L, &common);
+    cholmod_finish(&common);
+    return {std::move(perm), "node-" + name};
+}
 
 using Ldlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>>;
 using Cg = Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper,
@@ -155,6 +276,7 @@ struct SpdSolver::Impl {
     std::uint64_t pattern = 0;
     bool analyzed = false;
     bool factorized = false;
+    FactorStats stats;
     std::unique_ptr<CholmodFactor> cholmod;
     std::unique_ptr<Ldlt> ldlt;
     std::unique_ptr<Cg> cg;
@@ -210,29 +332,38 @@ struct SpdSolver::Impl {
 
 namespace {
 
-// CHOLMOD's supernodal kernels call BLAS. A multi-threaded BLAS busy-waits for its workers: with
-// every core already busy (ctest -j, a second job) the 56K-DOF demo factorized in 24-49 s with
-// 2 BLAS threads against 4.7 s with one, and on an idle 2-core machine one thread was as fast
-// (2.0 s vs 2.0-2.2 s). So unless the user sets OPENBLAS_NUM_THREADS, OpenBLAS runs on one
-// thread; coarsegrain's own parallelism is OpenMP over elements and nodes. Other BLAS
-// libraries (no openblas_set_num_threads symbol) are left alone.
-void limit_blas_threads() {
-    static std::once_flag once;
-    std::call_once(once, [] {
-        if (std::getenv("OPENBLAS_NUM_THREADS")) return;
-        using SetThreads = void (*)(int);
-        if (auto set =
-                reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads")))
-            set(1);
-    });
+// CHOLMOD's supernodal kernels call BLAS (dpotrf, dsyrk, dgemm, dtrsm on the supernodes), where
+// most of a large factorization's time goes. Debian's OpenBLAS (libopenblas0-pthread) runs its
+// own thread pool, which by default would use every core even with --threads 1; so before each
+// factorization its thread count is set to OpenMP's (omp_get_max_threads: --threads or
+// OMP_NUM_THREADS, else all cores), unless the user set OPENBLAS_NUM_THREADS. The two pools take
+// turns: no OpenMP region runs inside a factorization, and idle OpenBLAS threads spin for at
+// most about 0.1 s (2^28 cycles, OpenBLAS's default) before sleeping.
+// On an idle 2-core machine, 2 threads took the factorize phase of bench/ccx_vs_coarsegrain.py's
+// problem from 3.93 s to 2.56 s (an earlier measurement on the 56K-DOF demo found one thread as
+// fast: 2.0 s against 2.0-2.2 s). OpenBLAS threads spin while they wait for work, and each BLAS
+// call waits for its slowest thread: on a machine whose cores are busy with other jobs 2 threads
+// are slower than one (that factorization, load average 6 on 2 cores: median 4.3 s against
+// 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s against 4.7 s), so such
+// runs should pass --threads 1. The OpenMP build of OpenBLAS (libopenblas0-openmp, which would
+// share coarsegrain's OpenMP pool) is not a cure: under the same load its 2-thread
+// factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads build. Other
+// BLAS libraries (no openblas_set_num_threads symbol) are left alone.
+void match_blas_threads() {
+    static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
+    if (user_set) return;
+    using SetThreads = void (*)(int);
+    static const auto set =
+        reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    if (set) set(omp_get_max_threads());
 }
 
 }  // namespace
 
 SpdSolver::SpdSolver(SolverOptions options) : m_impl(std::make_unique<Impl>()) {
-    limit_blas_threads();
     CG_VERIFY(options.cg_tolerance > 0 && options.cg_tolerance < 1,
               "solver: cg_tolerance = {} must be in (0, 1)", options.cg_tolerance);
+    CG_VERIFY(options.node_dofs >= 1, "solver: node_dofs = {} must be >= 1", options.node_dofs);
     CG_VERIFY(options.cg_max_iterations >= 0,
               "solver: cg_max_iterations = {} must be >= 0 (0: 10 n)", options.cg_max_iterations);
     m_impl->options = options;
@@ -255,14 +386,25 @@ void SpdSolver::analyze(const SparseMatrix& A) {
     s.nnz = A.nonZeros();
     s.pattern = pattern_hash(A);
     switch (s.options.backend) {
-        case Backend::Cholmod:
+        case Backend::Cholmod: {
             s.cholmod = std::make_unique<CholmodFactor>();
-            s.cholmod->analyzePattern(A);
+            const std::vector<Index> start = column_groups(A, s.options.node_dofs);
+            std::string ordering;
+            if (static_cast<Index>(start.size()) - 1 < s.n) {
+                auto [perm, name] = group_ordering(A, start);
+                s.cholmod->analyze_permuted(A, perm);
+                ordering = std::move(name);
+            } else {
+                s.cholmod->analyzePattern(A);  // no node blocks: CHOLMOD's default ordering
+            }
             CG_VERIFY(s.cholmod->has_factor() && s.cholmod->status() >= 0,
                       "solver (cholmod): symbolic analysis of an n = {} matrix with {} nonzeros "
                       "failed (CHOLMOD status {}; out of memory?)",
                       s.n, s.nnz, s.cholmod->status());
+            if (ordering.empty()) ordering = ordering_name(s.cholmod->selected_ordering());
+            s.stats = {ordering, s.cholmod->factor_nonzeros(), s.cholmod->factor_flops()};
             break;
+        }
         case Backend::SimplicialLDLT:
             s.ldlt = std::make_unique<Ldlt>();
             s.ldlt->analyzePattern(A);
@@ -286,6 +428,7 @@ void SpdSolver::factorize(const SparseMatrix& A) {
     switch (s.options.backend) {
         case Backend::Cholmod: {
             CholmodFactor& f = *s.cholmod;
+            match_blas_threads();
             f.factorize(A);
             CG_VERIFY(f.status() >= 0,
                       "solver (cholmod): numeric factorization of an n = {} matrix failed "
@@ -374,6 +517,20 @@ Matrix SpdSolver::solve(const Matrix& b) const {
 Vector SpdSolver::solve(const Vector& b) const { return solve(Matrix(b)).col(0); }
 
 Backend SpdSolver::backend() const { return m_impl->options.backend; }
+
+FactorStats SpdSolver::factor_stats() const {
+    const Impl& s = *m_impl;
+    CG_VERIFY(s.analyzed && s.options.backend == Backend::Cholmod,
+              "solver ({}): factor_stats needs an analyzed cholmod solver", s.name());
+    return s.stats;
+}
+
+IndexVector SpdSolver::permutation() const {
+    const Impl& s = *m_impl;
+    CG_VERIFY(s.analyzed && s.options.backend == Backend::Cholmod,
+              "solver ({}): permutation needs an analyzed cholmod solver", s.name());
+    return s.cholmod->permutation();
+}
 
 Index SpdSolver::rows() const { return m_impl->analyzed ? m_impl->n : 0; }
 

@@ -171,7 +171,10 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
          {"C_eff", "E_x", "E_y", "E_min", "E_max", "E_directions", "stress_coarse", "stress_fine"})
         EXPECT_THAT(names, ::testing::Contains(std::string(name)));
     // The cell stresses are the means of the fine-mesh stresses of level 1 and of the fine
-    // solve over the 8x8 fine cells of each coarsest cell (equal volumes; 1e-12 relative).
+    // solve over the 8x8 fine cells of each coarsest cell (equal volumes). 1e-10 relative: the
+    // hierarchy's fine level and solution_fine.vtu come from two factorizations with different
+    // orderings (CHOLMOD's default; the node graph of the fine static solve), whose round-off
+    // differs by 1.5e-11 relative here (layers with a stiffness contrast of 5e4).
     for (const auto& [coarse_field, vtu] :
          {std::pair<std::string, std::string>{"stress_coarse", "solution_level_1.vtu"},
           {"stress_fine", "solution_fine.vtu"}}) {
@@ -181,7 +184,7 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
         Matrix mean = Matrix::Zero(4, fine_stress.cols());
         for (Index e = 0; e < 256; ++e)
             mean.row((e % 16) / 8 + 2 * ((e / 16) / 8)) += fine_stress.row(e) / 64.0;
-        EXPECT_LT((mean - cell_stress).norm(), 1e-12 * mean.norm()) << coarse_field;
+        EXPECT_LT((mean - cell_stress).norm(), 1e-10 * mean.norm()) << coarse_field;
     }
 }
 

@@ -72,8 +72,11 @@ TEST(CoarseRuntime, ErrorsOfAScaledSolutionAreExact) {
     EXPECT_NEAR(e.compliance_ratio, 0.5, 1e-14);
     EXPECT_NEAR(e.stress_rel, 0.5, 1e-14);  // stress is linear in u
     // ||u||_K^2 = f.u at equilibrium (the conditions are homogeneous), so the paper's
-    // normalisation by |f| is energy_rel * sqrt(f.u) / |f|.
-    EXPECT_NEAR(e.energy_over_load, 0.5 * std::sqrt(fine.f.dot(u)) / fine.f.norm(), 1e-12);
+    // normalisation by |f| is energy_rel * sqrt(f.u) / |f|. Equilibrium holds up to the solve's
+    // residual r: f.u - ||u||_K^2 = u.r, 2.5e-13 relative here (it depends on the ordering's
+    // round-off), so the bound is 1e-12 relative.
+    const double expected = 0.5 * std::sqrt(fine.f.dot(u)) / fine.f.norm();
+    EXPECT_NEAR(e.energy_over_load, expected, 1e-12 * expected);
 }
 
 // A Galerkin coarse model K_c = P^T K P, f_c = P^T f on a nested grid is the energy projection of

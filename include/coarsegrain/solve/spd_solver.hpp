@@ -22,6 +22,23 @@ struct SolverOptions {
     Backend backend = Backend::Cholmod;
     double cg_tolerance = 1e-12;  ///< relative residual for CG
     int cg_max_iterations = 0;    ///< 0: 10 * n
+    /// Unknowns per node when A is interleaved per node (dim for elasticity: x0 y0 z0 x1 ...).
+    /// With node_dofs > 1, cholmod computes its fill-reducing ordering on the graph of nodes
+    /// (about node_dofs^2 times fewer edges than A; CHOLMOD's AMD and METIS, whichever gives
+    /// the smaller factor), then expands each node to its unknowns. A node is a run of at most
+    /// node_dofs consecutive columns with identical patterns, so nodes with components removed
+    /// by Dirichlet conditions are fine. If A has no such runs (or node_dofs = 1) CHOLMOD's
+    /// default ordering is used: AMD, then METIS on A itself when AMD's fill is large.
+    int node_dofs = 1;
+};
+
+/// Symbolic statistics of a CHOLMOD analysis.
+struct FactorStats {
+    /// Fill-reducing ordering: "amd" or "metis" (CHOLMOD's default on A), "node-amd" or
+    /// "node-metis" (on the node graph, SolverOptions::node_dofs).
+    std::string ordering;
+    double nonzeros = 0;  ///< nnz(L)
+    double flops = 0;     ///< floating-point operations of the numeric factorization
 };
 
 /// Symmetric positive-definite sparse solver that keeps its factorization: factorize once,
@@ -69,6 +86,12 @@ class SpdSolver {
     Vector solve(const Vector& b) const;
 
     Backend backend() const;
+    /// Ordering, nnz(L) and flops of the last analysis.
+    /// @throws Error unless the backend is cholmod and analyze has run
+    FactorStats factor_stats() const;
+    /// Fill-reducing permutation of the last analysis, postordered (new k = old p[k]).
+    /// @throws Error unless the backend is cholmod and analyze has run
+    IndexVector permutation() const;
     /// Size n of the analyzed matrix (0 before analyze).
     Index rows() const;
 
