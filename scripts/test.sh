@@ -6,6 +6,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 jobs=$(nproc)
+# ctest runs $jobs test programs at once, each with its OpenMP threads; OpenBLAS threads would
+# spin on cores the other programs need (docs/guide.md, "The direct solver").
+export OPENBLAS_NUM_THREADS=1
 
 echo "== release build and full test suite" >&2
 scripts/build.sh release

@@ -86,10 +86,10 @@ void expect_picture(const std::string& file) {
 
 }  // namespace
 
-// The README's first command at a quarter of the grid: every method, the table, the report.
+// The README's first command at half the grid: every method, the table, the report.
 TEST(CliDemoSlow, ComparesEveryMethodAndWritesTheReport) {
     const std::string dir = test::temp_dir("cli_demo");
-    const Result r = cli("demo --scale 0.25 --out " + dir);
+    const Result r = cli("demo --scale 0.5 --out " + dir);
     ASSERT_EQ(r.code, 0) << r.output;
     const json s = read_json(dir + "/summary.json");
     EXPECT_EQ(s["command"], "demo");
