@@ -33,16 +33,19 @@ nlohmann::json errors_json(const coarsen::Errors& e) {
             {"stress_rel", e.stress_rel}};
 }
 
-FineRun solve_fine(const scene::Scene& sc, double read_seconds, const fs::path& dir) {
+FineRun solve_fine(const scene::Scene& sc, double read_seconds) {
     FineRun f;
     f.timings.add("read", read_seconds);
     f.model = scene::build_fine_model(sc, &f.timings);
     f.solution = scene::solve_static(f.model, sc.solver, &f.timings);
     f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
+    return f;
+}
+
+void write_fine(FineRun& f, const fs::path& dir) {
     const Phase phase("write", &f.timings);
     io::write_vtu((dir / "solution_fine.vtu").string(), f.model.mesh,
                   solution_fields(f.model, f.solution.u));
-    return f;
 }
 
 // Solves the coarse model and adds its "factorize" and "solve" seconds to `timings`. A coarse
@@ -104,13 +107,16 @@ nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene
 }
 
 /// Builds, solves and compares one method against the fine run; writes its files and its
-/// summary.json to `dir`. `fine_vtu` is the fine solution's file as seen from `dir`.
-MethodResult run_method(const scene::Scene& sc, const FineRun& f, const std::string& method,
-                        const fs::path& dir, const std::string& fine_vtu) {
+/// summary.json to `dir`. `fine_vtu` is the fine solution's file as seen from `dir`; if
+/// `write_fine_vtu`, it is written there once the coarse model is built (so that a method that
+/// fails on its input leaves no file).
+MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& method,
+                        const fs::path& dir, const std::string& fine_vtu, bool write_fine_vtu) {
     const scene::FineModel& fine = f.model;
     const Vector& u = f.solution.u;
     const int dim = fine.mesh.dim();
     const coarsen::CoarseModel coarse = coarsen::build_coarse_model(sc, fine, method);
+    if (write_fine_vtu) write_fine(f, dir);
     Timings tc = coarse.timings;
     const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc.solver, tc);
     MethodResult r;
@@ -188,8 +194,8 @@ void print_method_table(const scene::Scene& sc, const std::string& method, const
 
 void run_one(const scene::Scene& sc, const std::string& method, const fs::path& dir,
              double read_seconds) {
-    const FineRun f = solve_fine(sc, read_seconds, dir);
-    const MethodResult r = run_method(sc, f, method, dir, "solution_fine.vtu");
+    FineRun f = solve_fine(sc, read_seconds);
+    const MethodResult r = run_method(sc, f, method, dir, "solution_fine.vtu", true);
     print_method_table(sc, method, f, r);
     std::printf(
         "  wrote %s/summary.json, solution_fine.vtu, solution_coarse.vtu and the method's "
@@ -199,13 +205,14 @@ void run_one(const scene::Scene& sc, const std::string& method, const fs::path& 
 
 void run_comparison(const scene::Scene& sc, const std::vector<std::string>& methods,
                     const fs::path& dir, const std::string& command, double read_seconds) {
-    const FineRun f = solve_fine(sc, read_seconds, dir);
+    FineRun f = solve_fine(sc, read_seconds);
     std::vector<MethodResult> results;
     for (const std::string& method : methods) {
         const fs::path sub = dir / method;
         io::ensure_writable_dir(sub.string());
-        results.push_back(run_method(sc, f, method, sub, "../solution_fine.vtu"));
+        results.push_back(run_method(sc, f, method, sub, "../solution_fine.vtu", false));
     }
+    write_fine(f, dir);
     const nlohmann::json plots = write_report(sc, command, f, results, dir);
     nlohmann::json fine_json = fine_sizes(f.model);
     fine_json["timings"] = timings_json(f.timings);

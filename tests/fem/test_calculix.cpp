@@ -75,18 +75,18 @@ mesh::Mesh reference_mesh(const json& ref) {
     return m;
 }
 
-class CalculixReference : public ::testing::TestWithParam<std::string> {};
-
 }  // namespace
+
+class CalculixReference : public ::testing::TestWithParam<std::string> {};
 
 // The stored mesh is exactly our grid (same node numbering and coordinates, same hex corner
 // order and Kuhn split), so the reference also speaks for scenes with "mesh": {"grid": ...}.
 TEST_P(CalculixReference, MeshIsOurGrid) {
     const json ref = read_reference(GetParam());
     const mesh::Mesh m = reference_mesh(ref);
-    const mesh::Mesh grid = mesh::make_grid(m.type, vec(ref["grid"]["min"]),
-                                            vec(ref["grid"]["max"]),
-                                            vec(ref["grid"]["cells"]).cast<int>());
+    const mesh::Mesh grid =
+        mesh::make_grid(m.type, vec(ref["grid"]["min"]), vec(ref["grid"]["max"]),
+                        vec(ref["grid"]["cells"]).cast<int>());
     ASSERT_EQ(grid.num_nodes(), m.num_nodes());
     ASSERT_EQ(grid.num_elements(), m.num_elements());
     EXPECT_EQ(grid.rest_positions, m.rest_positions);  // coordinates are exact binary fractions
