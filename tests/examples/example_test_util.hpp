@@ -1,0 +1,69 @@
+#pragma once
+/// @file The reduced-size runs of the examples (examples/<name>/) that CI asserts numbers on.
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "test_util.hpp"
+
+namespace coarsegrain::test {
+
+/// A run of an example: the top `summary.json` of `coarsen --method ...` (one method, a list, or
+/// `all`).
+struct ExampleRun {
+    nlohmann::json summary;
+    std::string out;  ///< the output folder
+
+    /// The `errors` object of method `name` (fails the test if the method did not run).
+    const nlohmann::json& errors(const std::string& name) const {
+        if (summary.value("method", "") == name) return summary.at("errors");  // one method alone
+        for (const nlohmann::json& m : summary.value("methods", nlohmann::json::array()))
+            if (m.at("method") == name) return m.at("errors");
+        ADD_FAILURE() << "no method " << name << " in " << out << "/summary.json";
+        static const nlohmann::json none = nlohmann::json::object();
+        return none;
+    }
+    double error(const std::string& name, const std::string& key) const {
+        return errors(name).at(key).get<double>();
+    }
+};
+
+/// Runs examples/<name>/<name>.json with `patch` merged into it (RFC 7386: the reduced size), as
+/// `coarsegrain coarsen --method methods`, in a fresh temporary folder. An example with a
+/// `make_mesh` script first makes its meshes there with the mesh size scaled by `mesh_factor`
+/// (the factor is not passed when it is 1). The pictures are not made (COARSEGRAIN_PYTHON=false):
+/// tests/cli checks them on the demo.
+inline ExampleRun run_example(const std::string& name, const nlohmann::json& patch,
+                              const std::string& methods = "all", double mesh_factor = 1.0) {
+    namespace fs = std::filesystem;
+    const fs::path example = fs::path(COARSEGRAIN_EXAMPLES) / name;
+    const std::string dir = temp_dir("example_" + name);
+    if (fs::exists(example / "make_mesh")) {
+        std::string output;
+        const std::string factor = mesh_factor == 1.0 ? "" : " " + std::to_string(mesh_factor);
+        const int code = run((example / "make_mesh").string() + " " + dir + factor, &output);
+        EXPECT_EQ(code, 0) << output;
+    }
+    std::ifstream in(example / (name + ".json"));
+    nlohmann::json scene = nlohmann::json::parse(in);
+    scene.merge_patch(patch);
+    const std::string file = dir + "/" + name + ".json";
+    std::ofstream(file) << scene.dump(2);
+    ExampleRun r;
+    r.out = dir + "/out";
+    std::string output;
+    const int code = run("COARSEGRAIN_PYTHON=false " COARSEGRAIN_CLI " --quiet coarsen " + file +
+                             " --method " + methods + " --out " + r.out,
+                         &output);
+    EXPECT_EQ(code, 0) << output;
+    if (code == 0) {
+        std::ifstream s(r.out + "/summary.json");
+        r.summary = nlohmann::json::parse(s);
+    }
+    return r;
+}
+
+}  // namespace coarsegrain::test
