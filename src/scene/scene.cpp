@@ -374,7 +374,7 @@ json demo_scene(double scale) {
     const int ny = std::max(4, 4 * static_cast<int>(2 * scale));
     return json{
         {"description",
-         "Accordion beam: a 4x1x1 block of alternating stiff (E = 1e5) and soft (E = 1e2) "
+         "Accordion beam: a 4x1x1 block of alternating stiff (E = 1e7) and soft (E = 1e4) "
          "layers across its axis, clamped at x = 0 and hanging under gravity. Coarse: a tet grid "
          "with 4x coarser cells per axis (6 tets each) for the effective tensors and the "
          "baselines, and 3 levels of the material-adapted hierarchy (coarsest grid 4x coarser "
@@ -385,8 +385,8 @@ json demo_scene(double scale) {
            {{"min", {0, 0, 0}}, {"max", {4, 1, 1}}, {"cells", {nx, ny, ny}}, {"element", "hex"}}}}},
         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.25}, {"ids", {1, 2}}}}}},
         {"materials",
-         {{"1", {{"E", 1e5}, {"nu", 0.3}, {"density", 1.0}}},
-          {"2", {{"E", 1e2}, {"nu", 0.45}, {"density", 1.0}}}}},
+         {{"1", {{"E", 1e7}, {"nu", 0.3}, {"density", 1.0}}},
+          {"2", {{"E", 1e4}, {"nu", 0.45}, {"density", 1.0}}}}},
         {"dirichlet", {{{"box", {{"min", {-1e-9, -1, -1}}, {"max", {1e-9, 2, 2}}}}}}},
         {"loads", {{"gravity", {0, 0, -9.81}}}},
         {"probes", {{4, 0.5, 0.5}, {2, 0.5, 0.5}, {1, 0.5, 0.5}}},

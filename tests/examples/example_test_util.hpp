@@ -1,11 +1,12 @@
 #pragma once
 /// @file The reduced-size runs of the examples (examples/<name>/) that CI asserts numbers on.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "test_util.hpp"
 
@@ -20,8 +21,9 @@ struct ExampleRun {
     /// The `errors` object of method `name` (fails the test if the method did not run).
     const nlohmann::json& errors(const std::string& name) const {
         if (summary.value("method", "") == name) return summary.at("errors");  // one method alone
-        for (const nlohmann::json& m : summary.value("methods", nlohmann::json::array()))
-            if (m.at("method") == name) return m.at("errors");
+        if (summary.contains("methods"))
+            for (const nlohmann::json& m : summary.at("methods"))
+                if (m.at("method") == name) return m.at("errors");
         ADD_FAILURE() << "no method " << name << " in " << out << "/summary.json";
         static const nlohmann::json none = nlohmann::json::object();
         return none;
@@ -29,7 +31,23 @@ struct ExampleRun {
     double error(const std::string& name, const std::string& key) const {
         return errors(name).at(key).get<double>();
     }
+    /// The `summary.json` of method `name`'s own folder.
+    nlohmann::json method_summary(const std::string& name) const {
+        std::ifstream in(out + "/" + name + "/summary.json");
+        return nlohmann::json::parse(in);
+    }
 };
+
+/// Chen et al. 2019, Fig. 9: the energy error ||u^k - u||_A / ||u||_A of the single-level solve
+/// of an mra method falls at every step from the coarsest level to the finest.
+inline void expect_error_falls_with_level(const ExampleRun& r, const std::string& method) {
+    const nlohmann::json levels = r.method_summary(method).at("coarse").at("levels");
+    ASSERT_GE(levels.size(), 2u) << method;
+    for (std::size_t k = 1; k < levels.size(); ++k)
+        EXPECT_LT(levels[k].at("error_over_u").get<double>(),
+                  levels[k - 1].at("error_over_u").get<double>())
+            << method << ", level " << k + 1;
+}
 
 /// Runs examples/<name>/<name>.json with `patch` merged into it (RFC 7386: the reduced size), as
 /// `coarsegrain coarsen --method methods`, in a fresh temporary folder. An example with a
@@ -43,8 +61,9 @@ inline ExampleRun run_example(const std::string& name, const nlohmann::json& pat
     const std::string dir = temp_dir("example_" + name);
     if (fs::exists(example / "make_mesh")) {
         std::string output;
-        const std::string factor = mesh_factor == 1.0 ? "" : " " + std::to_string(mesh_factor);
-        const int code = run((example / "make_mesh").string() + " " + dir + factor, &output);
+        const std::string factor = mesh_factor == 1.0 ? "" : fmt::format(" {}", mesh_factor);
+        const int code =
+            run(fmt::format("{} {}{}", (example / "make_mesh").string(), dir, factor), &output);
         EXPECT_EQ(code, 0) << output;
     }
     std::ifstream in(example / (name + ".json"));
@@ -55,9 +74,9 @@ inline ExampleRun run_example(const std::string& name, const nlohmann::json& pat
     ExampleRun r;
     r.out = dir + "/out";
     std::string output;
-    const int code = run("COARSEGRAIN_PYTHON=false " COARSEGRAIN_CLI " --quiet coarsen " + file +
-                             " --method " + methods + " --out " + r.out,
-                         &output);
+    std::string command = "COARSEGRAIN_PYTHON=false " COARSEGRAIN_CLI " --quiet coarsen ";
+    command += file + " --method " + methods + " --out " + r.out;
+    const int code = run(command, &output);
     EXPECT_EQ(code, 0) << output;
     if (code == 0) {
         std::ifstream s(r.out + "/summary.json");
