@@ -3,36 +3,20 @@
 #include <array>
 
 #include "coarsegrain/common/error.hpp"
+#include "reference_cell.hpp"
 
 namespace coarsegrain::mesh {
 
-namespace {
-
-// Kuhn split of the unit cube into 6 tets: each tet is a monotone path v0 -> v7 that adds the
-// axes in one order. Cube corner c has bits (x = 1, y = 2, z = 4). Odd permutations are listed
-// with their last two nodes swapped so that every tet is positively oriented.
-constexpr std::array<std::array<int, 4>, 6> kKuhnTets = {{
-    {0, 1, 3, 7},  // x y z
-    {0, 1, 7, 5},  // x z y (odd)
-    {0, 2, 7, 3},  // y x z (odd)
-    {0, 2, 6, 7},  // y z x
-    {0, 4, 5, 7},  // z x y
-    {0, 4, 7, 6},  // z y x (odd)
-}};
-// Hex8 corner order as bit patterns (x = 1, y = 2, z = 4).
-constexpr std::array<int, 8> kHexCorners = {0, 1, 3, 2, 4, 5, 7, 6};
-constexpr std::array<int, 4> kQuadCorners = {0, 1, 3, 2};
-// Two triangles split along the (0,0)-(1,1) diagonal, both counter-clockwise.
-constexpr std::array<std::array<int, 3>, 2> kTriangles = {{{0, 1, 3}, {0, 3, 2}}};
-
-}  // namespace
+using detail::kHexCorners;
+using detail::kKuhnTets;
+using detail::kQuadCorners;
+using detail::kTriangles;
 
 Mesh make_grid(ElementType type, const Eigen::VectorXd& min, const Eigen::VectorXd& max,
                const Eigen::VectorXi& cells) {
     const int dim = element_dim(type);
     CG_VERIFY(min.size() == dim && max.size() == dim && cells.size() == dim,
-              "grid: a {} grid needs {} components in min, max and cells", element_name(type),
-              dim);
+              "grid: a {} grid needs {} components in min, max and cells", element_name(type), dim);
     for (int d = 0; d < dim; ++d) {
         CG_VERIFY(max[d] > min[d], "grid: max[{}] = {} must exceed min[{}] = {}", d, max[d], d,
                   min[d]);
@@ -56,10 +40,10 @@ Mesh make_grid(ElementType type, const Eigen::VectorXd& min, const Eigen::Vector
                 const Index v = i + nv[0] * (j + nv[1] * k);
                 const Eigen::Vector3d p(i, j, k);
                 for (int d = 0; d < dim; ++d)
-                    mesh.rest_positions(v, d) = (i == n[0] && d == 0) || (j == n[1] && d == 1) ||
-                                                        (k == n[2] && d == 2)
-                                                    ? info.max[d]
-                                                    : info.min[d] + p[d] * h[d];
+                    mesh.rest_positions(v, d) =
+                        (i == n[0] && d == 0) || (j == n[1] && d == 1) || (k == n[2] && d == 2)
+                            ? info.max[d]
+                            : info.min[d] + p[d] * h[d];
             }
 
     const Index num_cells = static_cast<Index>(n[0]) * n[1] * (dim == 3 ? n[2] : 1);
@@ -73,7 +57,8 @@ Mesh make_grid(ElementType type, const Eigen::VectorXd& min, const Eigen::Vector
                 const Index c = i + n[0] * (j + n[1] * k);
                 std::array<Index, 8> corner{};
                 for (int b = 0; b < (1 << dim); ++b)
-                    corner[b] = (i + (b & 1)) + nv[0] * ((j + ((b >> 1) & 1)) + nv[1] * (k + ((b >> 2) & 1)));
+                    corner[b] = (i + (b & 1)) +
+                                nv[0] * ((j + ((b >> 1) & 1)) + nv[1] * (k + ((b >> 2) & 1)));
                 switch (type) {
                     case ElementType::Hex8:
                         for (int a = 0; a < 8; ++a) mesh.elements(c, a) = corner[kHexCorners[a]];

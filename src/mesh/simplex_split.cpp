@@ -5,26 +5,16 @@
 #include <vector>
 
 #include "coarsegrain/common/error.hpp"
+#include "reference_cell.hpp"
 
 namespace coarsegrain::mesh {
 
 namespace {
 
-// Corners are named by bit patterns (x = 1, y = 2, z = 4) of the reference cell, as in
-// make_grid. The local index of bit pattern b is kHexLocal[b] (resp. kQuadLocal[b]): both
-// orderings swap patterns 2 <-> 3 (and 6 <-> 7), so each table is its own inverse.
-constexpr std::array<int, 8> kHexLocal = {0, 1, 3, 2, 4, 5, 7, 6};
-constexpr std::array<int, 4> kQuadLocal = {0, 1, 3, 2};
-// Kuhn tets as monotone paths 0 -> 7 (the table of make_grid), positively oriented.
-constexpr std::array<std::array<int, 4>, 6> kKuhnTets = {{
-    {0, 1, 3, 7},
-    {0, 1, 7, 5},
-    {0, 2, 7, 3},
-    {0, 2, 6, 7},
-    {0, 4, 5, 7},
-    {0, 4, 7, 6},
-}};
-constexpr std::array<std::array<int, 3>, 2> kTriangles = {{{0, 1, 3}, {0, 3, 2}}};
+using detail::kHexCorners;
+using detail::kKuhnTets;
+using detail::kQuadCorners;
+using detail::kTriangles;
 
 // Every hex face with the diagonal the Kuhn split cuts it along (both as global nodes, sorted)
 // must be cut alike by the two hexes that share it.
@@ -42,9 +32,9 @@ void verify_conforming(const Mesh& mesh) {
                 FaceCut c{};
                 int n = 0;
                 for (int b = 0; b < 8; ++b)
-                    if (((b >> axis) & 1) == side) c.face[n++] = mesh.elements(e, kHexLocal[b]);
+                    if (((b >> axis) & 1) == side) c.face[n++] = mesh.elements(e, kHexCorners[b]);
                 const int lo = side << axis, hi = (7 & ~(1 << axis)) | lo;
-                c.diagonal = {mesh.elements(e, kHexLocal[lo]), mesh.elements(e, kHexLocal[hi])};
+                c.diagonal = {mesh.elements(e, kHexCorners[lo]), mesh.elements(e, kHexCorners[hi])};
                 std::sort(c.face.begin(), c.face.end());
                 std::sort(c.diagonal.begin(), c.diagonal.end());
                 c.element = e;
@@ -80,8 +70,8 @@ Mesh simplex_split(const Mesh& mesh) {
         for (int s = 0; s < per; ++s) {
             const Index t = per * e + s;
             for (int a = 0; a < (hex ? 4 : 3); ++a)
-                out.elements(t, a) = hex ? mesh.elements(e, kHexLocal[kKuhnTets[s][a]])
-                                         : mesh.elements(e, kQuadLocal[kTriangles[s][a]]);
+                out.elements(t, a) = hex ? mesh.elements(e, kHexCorners[kKuhnTets[s][a]])
+                                         : mesh.elements(e, kQuadCorners[kTriangles[s][a]]);
             out.material_ids[t] = mesh.material_ids.size() > 0 ? mesh.material_ids[e] : 0;
         }
     try {

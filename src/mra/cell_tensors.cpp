@@ -11,8 +11,11 @@
 #include "coarsegrain/fem/loads.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/mesh/grid.hpp"
+#include "detail.hpp"
 
 namespace coarsegrain::mra {
+
+using detail::cell_count;
 
 namespace {
 
@@ -32,13 +35,6 @@ Eigen::MatrixXd mandel_tensor(const Vector& s, int dim) {
 Eigen::Vector3i cell_coordinates(Index c, const Eigen::Vector3i& cells) {
     return {static_cast<int>(c % cells[0]), static_cast<int>((c / cells[0]) % cells[1]),
             static_cast<int>(c / (static_cast<Index>(cells[0]) * cells[1]))};
-}
-
-/// Number of cells of a grid with `cells` per axis in `dim` dimensions.
-Index cell_count(const Eigen::Vector3i& cells, int dim) {
-    Index n = 1;
-    for (int d = 0; d < dim; ++d) n *= cells[d];
-    return n;
 }
 
 int log2_exact(int n) {

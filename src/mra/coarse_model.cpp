@@ -11,8 +11,11 @@
 #include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/mra/cell_tensors.hpp"
+#include "detail.hpp"
 
 namespace coarsegrain::mra {
+
+using detail::cell_count;
 
 namespace {
 
@@ -27,13 +30,6 @@ double parse_radius(const scene::JsonReader& r) {
     const double v = r.number();
     r.fail_unless(v >= 1, "expected a number >= 1 or \"inf\", got {}", v);
     return v;
-}
-
-/// Number of cells of a grid with `cells` per axis in `dim` dimensions.
-Index cell_count(const Eigen::Vector3i& cells, int dim) {
-    Index n = 1;
-    for (int d = 0; d < dim; ++d) n *= cells[d];
-    return n;
 }
 
 /// Volume-weighted mean of the fine element stress of u over each coarsest cell (Mandel rows).

@@ -7,6 +7,11 @@
 
 namespace coarsegrain::mra::detail {
 
+/// Number of cells of a grid with `cells` per axis in `dim` dimensions.
+inline Index cell_count(const Eigen::Vector3i& cells, int dim) {
+    return cells.head(dim).cast<Index>().prod();
+}
+
 /// Geometry of one step (level k+1 -> level k) on the regular grids.
 struct StepGeometry {
     int dim = 3;
