@@ -4,8 +4,6 @@
 // on a coarse mesh that does not mesh the holes, while the averages (naive, Voigt, Reuss) do not.
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -19,28 +17,11 @@ using nlohmann::json;
 /// The scene's probes: 0 on the top face above the holes, 1 above the solid half.
 constexpr int kCheeseHoley = 0, kCheeseSolid = 1;
 
-/// The entry of `method` in the run's summary.json `methods`. (ExampleRun::errors reads a copy of
-/// that list made by json::value and returns a reference into it, which dangles.)
-const json& cheese_method(const ExampleRun& run, const std::string& method) {
-    for (const json& m : run.summary.at("methods"))
-        if (m.at("method") == method) return m;
-    ADD_FAILURE() << "no method " << method << " in " << run.out << "/summary.json";
-    static const json none = json::object();
-    return none;
-}
-
-/// Error `key` of `method` (summary.json `methods[].errors`).
-double cheese_error(const ExampleRun& run, const std::string& method, const std::string& key) {
-    return cheese_method(run, method).at("errors").at(key).get<double>();
-}
-
 /// The downward displacement -u_z at probe `i`: of the fine solution if `method` is empty, else
 /// of that method's coarse solution carried to the fine mesh (its folder's summary.json).
 double cheese_sag(const ExampleRun& run, const std::string& method, int i) {
-    if (method.empty()) return -run.summary.at("probes").at(i).at("u").at(2).get<double>();
-    const std::string folder = cheese_method(run, method).at("folder").get<std::string>();
-    std::ifstream in(run.out + "/" + folder + "/summary.json");
-    return -json::parse(in).at("probes").at(i).at("u").at(2).get<double>();
+    const json summary = method.empty() ? run.summary : run.method_summary(method);
+    return -summary.at("probes").at(i).at("u").at(2).get<double>();
 }
 
 /// How much more the holey half sags than the solid half: the sag above the holes over the sag
@@ -78,8 +59,7 @@ TEST(ExamplesSlow, CheeseWheelHoleySideSagsMoreOnTheCoarseMesh) {
     for (const char* average : {"naive", "voigt", "reuss"}) {
         SCOPED_TRACE(average);
         // 1e-9: the same coarse system, assembled and solved in a different order.
-        EXPECT_NEAR(cheese_error(run, average, "l2_rel"), cheese_error(run, "naive", "l2_rel"),
-                    1e-9);
+        EXPECT_NEAR(run.error(average, "l2_rel"), run.error("naive", "l2_rel"), 1e-9);
         EXPECT_LT(cheese_softness(run, average), 1.0);
         EXPECT_LT(cheese_sag(run, average, kCheeseHoley) / cheese_sag(run, "", kCheeseHoley), 0.85);
     }
@@ -88,12 +68,11 @@ TEST(ExamplesSlow, CheeseWheelHoleySideSagsMoreOnTheCoarseMesh) {
     // (l2 0.179 against 0.264, compliance ratio 0.851 against 0.762, measured). Neither reaches
     // 1: the 200 linear tets are themselves too stiff (a hole-free wheel on the same coarse mesh,
     // with the exact cheese tensor, has a compliance ratio of 0.79 at the example's size).
-    EXPECT_LT(cheese_error(run, "effective-tensor", "l2_rel"), 0.22);
-    EXPECT_LT(cheese_error(run, "effective-tensor", "l2_rel"),
-              0.8 * cheese_error(run, "naive", "l2_rel"));
-    EXPECT_GT(cheese_error(run, "effective-tensor", "compliance_ratio"),
-              cheese_error(run, "naive", "compliance_ratio") + 0.05);
-    EXPECT_NEAR(cheese_error(run, "effective-tensor", "compliance_ratio"), 0.85, 0.05);
+    EXPECT_LT(run.error("effective-tensor", "l2_rel"), 0.22);
+    EXPECT_LT(run.error("effective-tensor", "l2_rel"), 0.8 * run.error("naive", "l2_rel"));
+    EXPECT_GT(run.error("effective-tensor", "compliance_ratio"),
+              run.error("naive", "compliance_ratio") + 0.05);
+    EXPECT_NEAR(run.error("effective-tensor", "compliance_ratio"), 0.85, 0.05);
 }
 
 }  // namespace
