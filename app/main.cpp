@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
             const cg::scene::Scene sc = cg::scene::load_scene(scene_file);
             const double read =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            cg::app::run_solve(sc, out_dir, "solve", read);
+            cg::app::run_solve(sc, out_dir, read);
         } else if (*coarsen) {
             const cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
             const double read =

@@ -11,8 +11,7 @@
 
 namespace coarsegrain::app {
 
-void run_solve(const scene::Scene& sc, const std::string& out_dir, const std::string& command,
-               double read_seconds) {
+void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_seconds) {
     io::ensure_writable_dir(out_dir);
     Timings t;
     t.add("read", read_seconds);
@@ -29,7 +28,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, const std::st
     nlohmann::json fine = fine_sizes(model);
     fine["timings"] = timings_json(t);
     write_summary(out_dir, {
-                               {"command", command},
+                               {"command", "solve"},
                                {"scene", sc.source},
                                {"fine", fine},
                                {"solver", solve::backend_name(sc.solver.backend)},
@@ -41,7 +40,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, const std::st
                                {"peak_memory_mb", peak_rss_mb()},
                            });
 
-    std::printf("coarsegrain %s: %s\n", command.c_str(), sc.source.c_str());
+    std::printf("coarsegrain solve: %s\n", sc.source.c_str());
     std::printf("  mesh      %dD %s, %d nodes, %d elements, %d DOFs (%d free)\n", dim,
                 mesh::element_name(model.mesh.type).c_str(), model.mesh.num_nodes(),
                 model.mesh.num_elements(), model.mesh.num_dofs(),

@@ -5,10 +5,9 @@
 
 namespace coarsegrain::app {
 
-/// Solves a scene's static problem on the fine mesh and writes DIR/solution.vtu and
-/// DIR/summary.json (DESIGN.md keys); prints a short table on stdout.
+/// `coarsegrain solve`: solves a scene's static problem on the fine mesh and writes
+/// DIR/solution.vtu and DIR/summary.json (DESIGN.md keys); prints a short table on stdout.
 /// @param[in] read_seconds  time already spent reading the scene (reported as "read")
-void run_solve(const scene::Scene& scene, const std::string& out_dir, const std::string& command,
-               double read_seconds);
+void run_solve(const scene::Scene& scene, const std::string& out_dir, double read_seconds);
 
 }  // namespace coarsegrain::app
