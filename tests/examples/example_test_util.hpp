@@ -50,7 +50,8 @@ inline void expect_error_falls_with_level(const ExampleRun& r, const std::string
 }
 
 /// Runs examples/<name>/<name>.json with `patch` merged into it (RFC 7386: the reduced size), as
-/// `coarsegrain coarsen --method methods`, in a fresh temporary folder. An example with a
+/// `coarsegrain coarsen --method methods`, in a fresh temporary folder holding a copy of the
+/// example's files. An example with a
 /// `make_mesh` script first makes its meshes there with the mesh size scaled by `mesh_factor`
 /// (the factor is not passed when it is 1). The pictures are not made (COARSEGRAIN_PYTHON=false):
 /// tests/cli checks them on the demo.
@@ -59,6 +60,9 @@ inline ExampleRun run_example(const std::string& name, const nlohmann::json& pat
     namespace fs = std::filesystem;
     const fs::path example = fs::path(COARSEGRAIN_EXAMPLES) / name;
     const std::string dir = temp_dir("example_" + name);
+    // The example's other files (images) beside the scene: its relative paths hold.
+    for (const fs::directory_entry& f : fs::directory_iterator(example))
+        if (f.is_regular_file()) fs::copy_file(f.path(), dir / f.path().filename());
     if (fs::exists(example / "make_mesh")) {
         std::string output;
         const std::string factor = mesh_factor == 1.0 ? "" : fmt::format(" {}", mesh_factor);
