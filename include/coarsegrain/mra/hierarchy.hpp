@@ -129,6 +129,7 @@
 
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 
@@ -142,11 +143,23 @@ enum class RadiusGrid {
     Coarse,  ///< rings of the coarser grid (level k), the paper's wording: 4 rho + 1 fine nodes
 };
 
+/// How the solves for Z are localized when the radius is finite (Sec. 3.5).
+enum class Localization {
+    /// Per coarse node i (the paper): B[S_i, S_i] z_i = -R[S_i, i] on the wavelets S_i near i.
+    Node,
+    /// Per coarse cell T, as the correctors of Localized Orthogonal Decomposition (Malqvist and
+    /// Peterseim): R = sum_T R^T with R^T = W Φ^{k+1} A_T Φ^{k+1,T} C^{†,T}, A_T the fine
+    /// stiffness of the fine elements inside T (sum_T A_T = A^q); each R^T is solved on the
+    /// wavelets within rho rings of T and Z = sum_T Z^T. Needs the element materials.
+    Cell,
+};
+
 /// "dirac", "linear" / "eliminate", "penalty", "diagonal_penalty", "constrain" / "fine",
-/// "coarse".
+/// "coarse" / "node", "cell".
 std::string refinement_name(Refinement r);
 std::string dirichlet_name(DirichletTreatment t);
 std::string radius_grid_name(RadiusGrid g);
+std::string localization_name(Localization l);
 
 /// Options of the hierarchy (Algorithm 1).
 struct Options {
@@ -166,6 +179,9 @@ struct Options {
     /// (at least as accurate as patch 1 with the same rho) and divides the number of
     /// factorizations by patch^dim.
     int patch = 1;
+    /// Node- or cell-wise localization (finite radii only; Cell needs patch 1 and the Eliminate
+    /// or Constrain treatment, whose fine operator is the sum of the element matrices).
+    Localization localization = Localization::Node;
     /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, an entry
     /// C̃_ij is dropped if |C̃_ij| < tau max_l |C̃_il| (relative to the largest coefficient of
     /// the same basis function). A^k = C̃^k A^{k+1} C̃^{k,T} is then the exact Galerkin matrix of
@@ -240,10 +256,14 @@ struct Hierarchy {
 /// @param[in] K           fine stiffness (num_dofs square, both triangles)
 /// @param[in] fixed_dofs  sorted Dirichlet DOFs (homogeneous)
 /// @param[in] options     see Options
+/// @param[in] materials   element materials of `mesh` (K must be their stiffness); needed only
+///                        by Localization::Cell with a finite radius
 /// @throws Error if the mesh is not a grid, the cells are not divisible by 2^(levels-1), an
-///         option is out of range, or a wavelet stiffness B^k is not positive definite
+///         option is out of range, cell localization lacks the materials, or a wavelet
+///         stiffness B^k is not positive definite
 Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
-                          const std::vector<Index>& fixed_dofs, const Options& options);
+                          const std::vector<Index>& fixed_dofs, const Options& options,
+                          const material::ElementMaterials* materials = nullptr);
 
 /// Restricts a fine vector (fine grid DOFs) to the hierarchy's fine DOFs and coarse-grains it to
 /// level k (Sec. 3.6): g^k = C̃^k ... C̃^{q-1} g^q.
