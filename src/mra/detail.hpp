@@ -75,6 +75,17 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                               const std::vector<CellStiffness>& parts, const StepGeometry& g,
                               int rings);
 
+/// A sparse left inverse X^T of C^T (C X = I, the role of C^† in Eq. 11) that reproduces rigid
+/// motions, X C r = r for the modes rig_fine (Rig^{k+1}), which cell localization needs: then
+/// A_T X C r = A_T r = 0 and the cell-wise corrections of a rigid motion vanish. Y: the rows of C
+/// scaled to unit sums, corrected as correct_invariance does (fine nodes with an absent DOF
+/// skipped); then X^T = Y + (I - Y C^T) C^†, so that C X = I and X C r = Y^T C r = r. Pattern:
+/// that of C plus that of (Y C^T) C^†. Linear refinement (for Dirac, C's single entry per row
+/// cannot hold the rotations).
+SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
+                                const StepGeometry& g, const Matrix& rig_fine,
+                                const Matrix& fine_positions, double rotation_scale);
+
 /// Drops entries with |M_ij| < tau max_l |M_il| (row-relative).
 void truncate_rows(SparseMatrix& M, double tau);
 

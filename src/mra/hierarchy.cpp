@@ -385,6 +385,20 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
         CG_VERIFY(L.dofs.size() > 0, "mra: level {} has no degree of freedom left", k);
         g.coarse_dofs = L.dofs;
+        const Index fine_count = grid_nodes(fine_cells, dim);
+        Matrix positions(fine_count, 3);
+        for (Index j = 0; j < fine_count; ++j)
+            positions.row(j) = node_coordinates(j, fine_cells, dim)
+                                   .cast<double>()
+                                   .cwiseProduct(g.fine_spacing)
+                                   .transpose() /
+                               unit;
+        const double rotation_scale = std::ldexp(1.0, q - k - 1);
+        if (by_cell && !std::isinf(L.radius) && options.refinement == Refinement::Linear) {
+            const Phase phase(tag + "rigid left inverse", &h.timings);
+            L.C_dagger =
+                detail::rigid_left_inverse(L.C, L.C_dagger, g, rig_next, positions, rotation_scale);
+        }
         const SparseMatrix& A = *A_next;
         SparseMatrix R;
         {
@@ -444,7 +458,6 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             // truncation). A boundary node whose DOFs were eliminated has no row: its support is
             // taken as geometric, within `reach` rings (the region R_i, plus one ring for the
             // wavelets of the linear refinement; every node for global solves).
-            const Index fine_count = grid_nodes(fine_cells, dim);
             std::vector<char> skip(static_cast<std::size_t>(fine_count), 0);
             std::vector<int> present_count(static_cast<std::size_t>(fine_count), 0);
             for (Index l = 0; l < dofs_next.size(); ++l)
@@ -482,15 +495,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                             skip[static_cast<std::size_t>(x + nf[0] * (y + nf[1] * z))] = 1;
             }
             const Matrix rig = L.C * rig_next;
-            Matrix positions(fine_count, 3);
-            for (Index j = 0; j < fine_count; ++j)
-                positions.row(j) = node_coordinates(j, fine_cells, dim)
-                                       .cast<double>()
-                                       .cwiseProduct(g.fine_spacing)
-                                       .transpose() /
-                                   unit;
-            L.invariance_applied = detail::correct_invariance(
-                L.C_adapted, g, skip, rig, rig_next, positions, std::ldexp(1.0, q - k - 1));
+            L.invariance_applied = detail::correct_invariance(L.C_adapted, g, skip, rig, rig_next,
+                                                              positions, rotation_scale);
             rig_next = rig;
         } else {
             L.invariance_applied.assign(static_cast<std::size_t>(grid_nodes(fine_cells, dim)), 0);

@@ -333,7 +333,9 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
         std::sort(dofs.begin(), dofs.end());
         dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
         CellStiffness part;
-        part.cell = node_coordinates(t, cells, dim);
+        part.cell = Eigen::Vector3i::Zero();
+        for (Index rest = t, d = 0; d < dim; rest /= cells[d], ++d)
+            part.cell[d] = static_cast<int>(rest % cells[d]);
         part.dofs = Eigen::Map<const IndexVector>(dofs.data(), static_cast<Index>(dofs.size()));
         part.A = Matrix::Zero(part.dofs.size(), part.dofs.size());
         for (const Index e : elems) {
@@ -409,6 +411,28 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
     }
     if (error) std::rethrow_exception(error);
     return from_parts(out, nc, nw);
+}
+
+SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
+                                const StepGeometry& g, const Matrix& rig_fine,
+                                const Matrix& fine_positions, double rotation_scale) {
+    const Vector sums = C * Vector::Ones(C.cols());
+    Vector scale(sums.size());
+    for (Index i = 0; i < sums.size(); ++i) scale[i] = sums[i] != 0.0 ? 1.0 / sums[i] : 0.0;
+    SparseMatrix Y = scale.asDiagonal() * C;
+    const Index num_fine = grid_nodes(g.fine_cells, g.dim);
+    std::vector<int> present(static_cast<std::size_t>(num_fine), 0);
+    for (Index l = 0; l < g.fine_dofs.size(); ++l)
+        ++present[static_cast<std::size_t>(g.fine_dofs[l] / g.dim)];
+    std::vector<char> skip(static_cast<std::size_t>(num_fine), 0);
+    for (Index j = 0; j < num_fine; ++j)
+        skip[static_cast<std::size_t>(j)] = present[static_cast<std::size_t>(j)] != g.dim;
+    correct_invariance(Y, g, skip, Matrix(C * rig_fine), rig_fine, fine_positions, rotation_scale);
+    const SparseMatrix YCt = Y * SparseMatrix(C.transpose());
+    SparseMatrix X = Y + C_dagger - SparseMatrix(YCt * C_dagger);
+    X.prune(0.0);
+    X.makeCompressed();
+    return X;
 }
 
 void truncate_rows(SparseMatrix& M, double tau) {

@@ -77,6 +77,35 @@
 /// localized radii (with per-step values, e.g. global for the coarse steps) remain the option
 /// for large 3D models, at a much larger error.
 ///
+/// ## Cell-wise localization (Options::localization)
+/// Localization::Cell splits R by coarse cells, as the element correctors of Localized
+/// Orthogonal Decomposition, with a left inverse that reproduces rigid motions (the library's
+/// injection C^† does not; detail::rigid_left_inverse, linear refinement only). Same problems
+/// and columns as the table above (bench_mra_localization 32 3 l, no truncation; err = coarsest
+/// energy error with / without the invariance correction; dens = C̃ of the finest step; build
+/// seconds, 1 thread, loaded machine):
+///
+/// | rho | square node  | square cell     | layered node  | layered cell | density   | build s   |
+/// |-----|--------------|-----------------|---------------|--------------|-----------|-----------|
+/// | 1c  | 0.99 / 0.96  | 0.72 / 0.80     | 0.998 / 0.73  | 0.96 / 0.96  | 0.05/0.18 | 0.06/0.4  |
+/// | 2c  | 0.98 / 0.91  | 0.40 / 0.47     | 0.998 / 0.30  | 0.85 / 0.85  | 0.11/0.26 | 0.2/0.7   |
+/// | 4c  | 0.78 / 0.85  | 0.071 / 0.073   | 0.996 / 0.055 | 0.65 / 0.65  | 0.26/0.44 | 0.6/1.5   |
+/// | 6c  | 0.16 / 0.27  | 0.0117 / 0.0117 | 0.997 / 0.036 | 0.41 / 0.41  | 0.44/0.62 | 0.7/2.1   |
+///
+/// (density and build: node / cell, square; global: 0.0116 / 0.0349.) On the inclusions cell-wise
+/// localization reaches the global error at 6c and is 10x more accurate than node-wise at 4c, and
+/// the invariance correction no longer matters (the construction reproduces rigid motions by itself
+/// away from the boundary). On the layered composite it behaves like the invariance correction
+/// (same explanation) and is far worse than node-wise without correction. The accordion scene at
+/// 32x8x8 (E 1e7 / 1e4, 3
+/// levels, rho in fine rings, invariance on, coarsest error node / cell): linear rho = 1: 0.9999 /
+/// 0.992, 2: 0.999 / 0.992, 3: 0.999 / 0.992 (level 2: 0.997 / 0.63), build 3 s / 25 s at rho = 2;
+/// Dirac (injection C^†) rho = 1: 0.81 / 0.99, 2: 0.98 / 0.93. So it does not cure the 3D locking.
+/// Costs: C̃ 2x denser and builds 2-8x longer than node-wise at the same rho (one factorization per
+/// cell, regions one cell wider, right-hand sides through Φ^{k+1} at coarser steps). With the dense
+/// Moore-Penrose C^† (an experiment) the square gave 0.83 / 0.45 / 0.095 / 0.012 at 1c / 2c /
+/// 4c / 6c, at C̃ density 1.
+///
 /// ## Cost in 3D (bench/bench_mra)
 /// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
 /// clamped at x = 0, gravity), hex grids, 3 levels (coarsest = grid / 4), truncation 1e-7,
