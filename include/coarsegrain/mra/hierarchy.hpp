@@ -179,7 +179,9 @@ enum class Localization {
     /// Per coarse cell T, as the correctors of Localized Orthogonal Decomposition (Malqvist and
     /// Peterseim): R = sum_T R^T with R^T = W Φ^{k+1} A_T Φ^{k+1,T} C^{†,T}, A_T the fine
     /// stiffness of the fine elements inside T (sum_T A_T = A^q); each R^T is solved on the
-    /// wavelets within rho rings of T and Z = sum_T Z^T. Needs the element materials.
+    /// wavelets within rho rings of T and Z = sum_T Z^T. Needs the element materials. With the
+    /// linear refinement C^† is replaced by a sparse left inverse that reproduces rigid motions
+    /// (then the corrections of a rigid motion cancel cell by cell); see the table above.
     Cell,
 };
 
@@ -240,8 +242,8 @@ struct Level {
     IndexVector dofs;
     IndexVector dropped_dofs;  ///< grid DOFs of level k without a basis function
     SparseMatrix C;            ///< canonical refinement C^k, #dofs by #dofs(k+1) (Eq. 6)
-    SparseMatrix C_dagger;     ///< left inverse C^{k,†} (Eq. 10)
-    SparseMatrix W;            ///< kernel W^k, #wavelets by #dofs(k+1)
+    SparseMatrix C_dagger;   ///< left inverse C^{k,†} (Eq. 10; rigid one for Localization::Cell)
+    SparseMatrix W;          ///< kernel W^k, #wavelets by #dofs(k+1)
     SparseMatrix C_adapted;  ///< C̃^k = C^{k,†} + Z W^k (Eq. 11), localized/corrected/truncated
     SparseMatrix A;          ///< A^k = C̃^k A^{k+1} C̃^{k,T} (Alg. 1 line 7)
     SparseMatrix B;          ///< B^k = W^k A^{k+1} W^{k,T} (Alg. 1 line 2)
