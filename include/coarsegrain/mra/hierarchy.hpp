@@ -97,14 +97,15 @@
 /// the invariance correction no longer matters (the construction reproduces rigid motions by itself
 /// away from the boundary). On the layered composite it behaves like the invariance correction
 /// (same explanation) and is far worse than node-wise without correction. The accordion scene at
-/// 32x8x8 (E 1e7 / 1e4, 3
-/// levels, rho in fine rings, invariance on, coarsest error node / cell): linear rho = 1: 0.9999 /
-/// 0.992, 2: 0.999 / 0.992, 3: 0.999 / 0.992 (level 2: 0.997 / 0.63), build 3 s / 25 s at rho = 2;
-/// Dirac (injection C^†) rho = 1: 0.81 / 0.99, 2: 0.98 / 0.93. So it does not cure the 3D locking.
-/// Costs: C̃ 2x denser and builds 2-8x longer than node-wise at the same rho (one factorization per
-/// cell, regions one cell wider, right-hand sides through Φ^{k+1} at coarser steps). With the dense
-/// Moore-Penrose C^† (an experiment) the square gave 0.83 / 0.45 / 0.095 / 0.012 at 1c / 2c /
-/// 4c / 6c, at C̃ density 1.
+/// 32x8x8 (E 1e7 / 1e4, 3 levels, rho in fine rings, invariance on, truncation 1e-7, coarsest
+/// error node / cell): linear rho = 1: 0.9999 / 0.992, 2: 0.999 / 0.992, 3: 0.999 / 0.992 (level 2:
+/// 0.997 / 0.63), build 3 s / 25 s at rho = 2; Dirac (injection C^†) rho = 1: 0.81 / 0.99, 2: 0.98
+/// / 0.93. With global solves at the coarse step and cell / node at the fine one: rho = 2: 0.63 /
+/// 0.997, rho = 4: 0.72 / 0.999 (not monotonic; builds 26 s / 3 s and 70 s / 21 s). So it does not
+/// cure the 3D locking. Costs: C̃ 2x denser and builds 2-8x longer than node-wise at the same rho
+/// (one factorization per cell, regions one cell wider, right-hand sides through Φ^{k+1} at coarser
+/// steps). With the dense Moore-Penrose C^† (an experiment) the square gave 0.83 / 0.45 / 0.095 /
+/// 0.012 at 1c / 2c / 4c / 6c, at C̃ density 1.
 ///
 /// ## Cost in 3D (bench/bench_mra)
 /// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
