@@ -7,6 +7,7 @@
 //     r: radius table (rho 1..8, fine/coarse rings, invariance on/off)
 //     t: truncation table (0, 1e-7, 1e-5, 1e-4, 1e-2) for global and localized solves
 //     c: contrast table (1e1..1e4), hung square only
+//     l: node- against cell-wise localization (rho 1..6 coarse rings, invariance on/off)
 //
 // Columns: err_u = ||u^1 - u||_A / ||u||_A, err_g = ||u^1 - u||_A / ||g||_2 (Fig. 6/9 metric),
 // dens_C = nonzero fraction of C̃ of the finest step, dens_A = of A^1, defect = Eq. 12
@@ -41,7 +42,7 @@ double density(const cg::SparseMatrix& M) {
 
 Row evaluate(const cg::test::GridProblem& p, const Options& o) {
     const auto t0 = std::chrono::steady_clock::now();
-    const cg::mra::Hierarchy h = cg::mra::build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+    const cg::mra::Hierarchy h = cg::mra::build_hierarchy(p.mesh, p.K, p.bc.dofs, o, &p.materials);
     Row r;
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     cg::mra::MultilevelSolver s(h);
@@ -63,13 +64,15 @@ std::string radius_label(double rho, RadiusGrid g) {
 }
 
 void header() {
-    std::printf("%-10s %-6s %-4s %-7s %-8s %8s %9s %7s %7s %8s %7s\n", "problem", "rho", "inv",
-                "trunc", "contrast", "err_u", "err_g", "dens_C", "dens_A", "defect", "build");
+    std::printf("%-10s %-6s %-4s %-4s %-7s %-8s %8s %9s %7s %7s %8s %7s\n", "problem", "rho", "loc",
+                "inv", "trunc", "contrast", "err_u", "err_g", "dens_C", "dens_A", "defect",
+                "build");
 }
 
 void print(const char* name, const Options& o, double contrast, const Row& r) {
-    std::printf("%-10s %-6s %-4d %-7.0e %-8.0e %8.4f %9.4g %7.3f %7.3f %8.2g %7.2f\n", name,
-                radius_label(o.radius[0], o.radius_grid).c_str(), o.invariance ? 1 : 0,
+    std::printf("%-10s %-6s %-4s %-4d %-7.0e %-8.0e %8.4f %9.4g %7.3f %7.3f %8.2g %7.2f\n", name,
+                radius_label(o.radius[0], o.radius_grid).c_str(),
+                cg::mra::localization_name(o.localization).c_str(), o.invariance ? 1 : 0,
                 o.truncation, contrast, r.err_u, r.err_g, r.dens_C, r.dens_A, r.defect, r.seconds);
     std::fflush(stdout);
 }
@@ -126,6 +129,18 @@ int main(int argc, char** argv) {
                     o.truncation = tau;
                     print(pr.name, o, pr.contrast, evaluate(p, o));
                 }
+        if (tables.find('l') != std::string::npos)
+            for (const bool inv : {true, false})
+                for (int rho = 1; rho <= 6; ++rho)
+                    for (const auto loc :
+                         {cg::mra::Localization::Node, cg::mra::Localization::Cell}) {
+                        o = base;
+                        o.radius = {static_cast<double>(rho)};
+                        o.radius_grid = RadiusGrid::Coarse;
+                        o.invariance = inv;
+                        o.localization = loc;
+                        print(pr.name, o, pr.contrast, evaluate(p, o));
+                    }
     }
     if (tables.find('c') != std::string::npos)
         for (const double contrast : {1e1, 1e2, 1e3, 1e4}) {

@@ -191,6 +191,11 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
                        s);
         o.radius_grid = s == "fine" ? RadiusGrid::Fine : RadiusGrid::Coarse;
     }
+    if (auto v = r.find("localization")) {
+        const std::string s = v->string();
+        v->fail_unless(s == "node" || s == "cell", "expected \"node\" or \"cell\", got \"{}\"", s);
+        o.localization = s == "node" ? Localization::Node : Localization::Cell;
+    }
     if (auto v = r.find("patch")) {
         o.patch = v->integer();
         v->fail_unless(o.patch >= 1, "expected an integer >= 1, got {}", o.patch);
@@ -271,6 +276,7 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
                            {"invariance", o.invariance},
                            {"dirichlet", dirichlet_name(o.dirichlet)}};
     m.report["options"]["patch"] = o.patch;
+    m.report["options"]["localization"] = localization_name(o.localization);
     nlohmann::json levels = nlohmann::json::array();
     for (const Level& L : h.levels) {
         levels.push_back(
@@ -363,7 +369,7 @@ coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::
                      scene.source, options.levels, options.levels - 1, factor,
                      fine.mesh.grid->cells[d], d);
     const auto h = std::make_shared<const Hierarchy>(
-        build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options));
+        build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
     coarsen::CoarseModel m = coarse_model(*h, fine.f);
     m.compare_with_fine = [h, build_levels = m.report["levels"], compare](
                               const scene::Scene&, const scene::FineModel& f, const Vector&) {

@@ -4,6 +4,8 @@
 #include <vector>
 
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/material/material.hpp"
+#include "coarsegrain/mesh/mesh.hpp"
 
 namespace coarsegrain::mra::detail {
 
@@ -44,6 +46,45 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
 /// own dense (small) or sparse Cholesky factorization.
 SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
                          const StepGeometry& g, int rings, int patch);
+
+/// The part A_T of the fine operator from the fine elements inside one cell T of a coarser level
+/// (Localization::Cell): the sum of their element matrices on their present fine DOFs.
+struct CellStiffness {
+    Eigen::Vector3i cell;  ///< grid coordinates of T on its level
+    IndexVector dofs;      ///< indices into the hierarchy's present fine DOFs, sorted
+    Matrix A;              ///< dense, #dofs square
+};
+
+/// A_T for every cell T of a level with `cells` per axis (cells without elements are left out);
+/// an element belongs to the cell containing its centroid. With the present fine DOFs
+/// `fine_dofs` (the fixed ones eliminated) sum_T A_T is the fine operator principal_submatrix(K,
+/// fine_dofs) when K is the stiffness of `materials`.
+std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
+                                          const material::ElementMaterials& materials,
+                                          const IndexVector& fine_dofs,
+                                          const Eigen::Vector3i& cells);
+
+/// Z with cell-wise localized solves (Localization::Cell): for every cell T of level k (parts),
+/// R^T = (W Φ)[:, T] A_T (C^† Φ)[:, T]^T, Φ = Φ^{k+1} on the present fine DOFs (WPhi = W Φ,
+/// CdPhi = C^† Φ), is solved on the wavelets S_T with a nonzero on a level-(k+1) node within
+/// `rings` rings of T: B[S_T, S_T] z = -R^T[S_T, :], and Z = sum_T Z^T. Since sum_T A_T = A^q,
+/// sum_T R^T = R = W A^{k+1} C^{†,T}: with regions spanning the grid this is the global Z.
+/// One factorization per cell, cells in parallel (OpenMP).
+SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
+                              const SparseMatrix& WPhi, const SparseMatrix& CdPhi,
+                              const std::vector<CellStiffness>& parts, const StepGeometry& g,
+                              int rings);
+
+/// A sparse left inverse X^T of C^T (C X = I, the role of C^† in Eq. 11) that reproduces rigid
+/// motions, X C r = r for the modes rig_fine (Rig^{k+1}), which cell localization needs: then
+/// A_T X C r = A_T r = 0 and the cell-wise corrections of a rigid motion vanish. Y: the rows of C
+/// scaled to unit sums, corrected as correct_invariance does (fine nodes with an absent DOF
+/// skipped); then X^T = Y + (I - Y C^T) C^†, so that C X = I and X C r = Y^T C r = r. Pattern:
+/// that of C plus that of (Y C^T) C^†. Linear refinement (for Dirac, C's single entry per row
+/// cannot hold the rotations).
+SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
+                                const StepGeometry& g, const Matrix& rig_fine,
+                                const Matrix& fine_positions, double rotation_scale);
 
 /// Drops entries with |M_ij| < tau max_l |M_il| (row-relative).
 void truncate_rows(SparseMatrix& M, double tau);

@@ -174,6 +174,28 @@ SparseMatrix symmetrized(const SparseMatrix& M) {
 }
 
 /// Φ^q: the selection of the present fine DOFs, #fine_dofs by fine grid DOFs.
+/// Largest Chebyshev distance, in cells of level k, between the node of a row of Phi (Φ^k on the
+/// present fine DOFs, rows h.level(k).dofs or h.fine_dofs for k = q) and the finest nodes of its
+/// entries, rounded up.
+int basis_reach(const Hierarchy& h, const SparseMatrix& Phi, int k) {
+    const int q = h.num_levels();
+    if (k == q) return 0;
+    const int dim = h.dim;
+    const IndexVector& rows = h.level(k).dofs;
+    const int scale = 1 << (q - k);
+    int reach = 0;
+    for (Index l = 0; l < Phi.outerSize(); ++l) {
+        const Eigen::Vector3i x = node_coordinates(h.fine_dofs[l] / dim, h.fine_cells, dim);
+        for (SparseMatrix::InnerIterator it(Phi, l); it; ++it) {
+            const Eigen::Vector3i c =
+                scale * node_coordinates(rows[it.row()] / dim, h.cells(k), dim);
+            const int d = (x - c).cwiseAbs().maxCoeff();
+            reach = std::max(reach, (d + scale - 1) / scale);
+        }
+    }
+    return reach;
+}
+
 SparseMatrix fine_selection(const Hierarchy& h) {
     SparseMatrix Phi(h.fine_dofs.size(), h.fine_grid_dofs());
     std::vector<Triplet> t;
@@ -206,6 +228,8 @@ std::string dirichlet_name(DirichletTreatment t) {
 
 std::string radius_grid_name(RadiusGrid g) { return g == RadiusGrid::Fine ? "fine" : "coarse"; }
 
+std::string localization_name(Localization l) { return l == Localization::Node ? "node" : "cell"; }
+
 Index Hierarchy::fine_grid_dofs() const { return dim * grid_nodes(fine_cells, dim); }
 
 const Level& Hierarchy::level(int k) const {
@@ -233,7 +257,8 @@ std::size_t storage_bytes(const SparseMatrix& M) {
 }
 
 Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
-                          const std::vector<Index>& fixed_dofs, const Options& options) {
+                          const std::vector<Index>& fixed_dofs, const Options& options,
+                          const material::ElementMaterials* materials) {
     CG_VERIFY(mesh.grid.has_value(),
               "mra: the fine mesh must be a regular grid (mesh.grid), the material-adapted "
               "hierarchy is built on nested grids");
@@ -257,6 +282,20 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     for (const double r : options.radius)
         CG_VERIFY(r >= 1, "mra: radius {} must be at least 1 (or infinity)", r);
     CG_VERIFY(options.patch >= 1, "mra: patch = {} must be at least 1", options.patch);
+    const bool by_cell = options.localization == Localization::Cell &&
+                         std::any_of(options.radius.begin(), options.radius.end(),
+                                     [](double r) { return !std::isinf(r); });
+    if (by_cell) {
+        CG_VERIFY(materials != nullptr,
+                  "mra: cell localization needs the element materials (build_hierarchy argument)");
+        CG_VERIFY(options.patch == 1, "mra: cell localization needs patch = 1, got {}",
+                  options.patch);
+        CG_VERIFY(options.dirichlet == DirichletTreatment::Eliminate ||
+                      options.dirichlet == DirichletTreatment::Constrain,
+                  "mra: cell localization needs the eliminate or constrain Dirichlet treatment "
+                  "(the penalty is not part of the element matrices), got {}",
+                  dirichlet_name(options.dirichlet));
+    }
     CG_VERIFY(options.truncation >= 0 && options.truncation < 1,
               "mra: truncation = {} must be in [0, 1)", options.truncation);
     CG_VERIFY(options.penalty > 0, "mra: penalty = {} must be positive", options.penalty);
@@ -302,6 +341,12 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     for (const Index d : fixed_dofs) fixed_node[static_cast<std::size_t>(d / dim)] = 1;
 
     SparseMatrix Phi = options.store_bases ? fine_selection(h) : SparseMatrix();
+    // Cell localization: Φ^{k+1} on the present fine DOFs (Φ^q = I).
+    SparseMatrix Phi_present;
+    if (by_cell) {
+        Phi_present.resize(h.fine_dofs.size(), h.fine_dofs.size());
+        Phi_present.setIdentity();
+    }
 
     // Rigid motions on the present DOFs of the current finer level (invariance correction), in
     // units of the largest fine spacing.
@@ -340,13 +385,28 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
         CG_VERIFY(L.dofs.size() > 0, "mra: level {} has no degree of freedom left", k);
         g.coarse_dofs = L.dofs;
+        const Index fine_count = grid_nodes(fine_cells, dim);
+        Matrix positions(fine_count, 3);
+        for (Index j = 0; j < fine_count; ++j)
+            positions.row(j) = node_coordinates(j, fine_cells, dim)
+                                   .cast<double>()
+                                   .cwiseProduct(g.fine_spacing)
+                                   .transpose() /
+                               unit;
+        const double rotation_scale = std::ldexp(1.0, q - k - 1);
+        if (by_cell && !std::isinf(L.radius) && options.refinement == Refinement::Linear) {
+            const Phase phase(tag + "rigid left inverse", &h.timings);
+            L.C_dagger =
+                detail::rigid_left_inverse(L.C, L.C_dagger, g, rig_next, positions, rotation_scale);
+        }
         const SparseMatrix& A = *A_next;
         SparseMatrix R;
         {
             const Phase phase(tag + "B", &h.timings);
             const SparseMatrix AWt = product(A, SparseMatrix(L.W.transpose()));
             L.B = symmetrized(product(L.W, AWt));
-            R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
+            if (!by_cell || std::isinf(L.radius))
+                R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
         }
         const int rings = std::isinf(L.radius)
                               ? 0
@@ -358,7 +418,12 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                 detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation);
         } else {
             SparseMatrix Z;
-            {
+            if (by_cell) {
+                const Phase phase(tag + "Z (cell-localized solves)", &h.timings);
+                Z = detail::cell_localized_z(
+                    L.B, L.W, product(L.W, Phi_present), product(L.C_dagger, Phi_present),
+                    detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells), g, rings);
+            } else {
                 const Phase phase(tag + "Z (localized solves)", &h.timings);
                 Z = detail::localized_z(L.B, R, L.W, g, rings, options.patch);
             }
@@ -393,7 +458,6 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             // truncation). A boundary node whose DOFs were eliminated has no row: its support is
             // taken as geometric, within `reach` rings (the region R_i, plus one ring for the
             // wavelets of the linear refinement; every node for global solves).
-            const Index fine_count = grid_nodes(fine_cells, dim);
             std::vector<char> skip(static_cast<std::size_t>(fine_count), 0);
             std::vector<int> present_count(static_cast<std::size_t>(fine_count), 0);
             for (Index l = 0; l < dofs_next.size(); ++l)
@@ -410,10 +474,14 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                 ++kept_count[static_cast<std::size_t>(L.dofs[r] / dim)];
             const Eigen::Vector3i nf(fine_cells[0] + 1, fine_cells[1] + 1,
                                      dim == 3 ? fine_cells[2] + 1 : 1);
-            const int reach = std::isinf(L.radius)
-                                  ? nf.maxCoeff()
-                                  : rings + 2 * (options.patch - 1) +
-                                        (options.refinement == Refinement::Linear ? 1 : 0);
+            // Cell localization: node i gets rows from the cells T that (C^† Φ^{k+1})[i, :]
+            // touches, within phi_reach (+1 for the linear C^†) of node i, and a cell's region
+            // reaches `rings` beyond the cell, 2 rings beyond its nodes.
+            const int linear = options.refinement == Refinement::Linear ? 1 : 0;
+            const int reach = std::isinf(L.radius) ? nf.maxCoeff()
+                              : by_cell
+                                  ? rings + 2 + basis_reach(h, Phi_present, k + 1) + 2 * linear
+                                  : rings + 2 * (options.patch - 1) + linear;
             for (Index i = 0; i < coarse_nodes; ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)
@@ -427,15 +495,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                             skip[static_cast<std::size_t>(x + nf[0] * (y + nf[1] * z))] = 1;
             }
             const Matrix rig = L.C * rig_next;
-            Matrix positions(fine_count, 3);
-            for (Index j = 0; j < fine_count; ++j)
-                positions.row(j) = node_coordinates(j, fine_cells, dim)
-                                       .cast<double>()
-                                       .cwiseProduct(g.fine_spacing)
-                                       .transpose() /
-                                   unit;
-            L.invariance_applied = detail::correct_invariance(
-                L.C_adapted, g, skip, rig, rig_next, positions, std::ldexp(1.0, q - k - 1));
+            L.invariance_applied = detail::correct_invariance(L.C_adapted, g, skip, rig, rig_next,
+                                                              positions, rotation_scale);
             rig_next = rig;
         } else {
             L.invariance_applied.assign(static_cast<std::size_t>(grid_nodes(fine_cells, dim)), 0);
@@ -451,6 +512,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             L.Phi = product(L.C_adapted, Phi);
             Phi = L.Phi;
         }
+        if (by_cell) Phi_present = product(L.C_adapted, Phi_present);
         L.build_seconds = seconds_since(t0);
         A_next = &L.A;
         dofs_next = L.dofs;

@@ -7,6 +7,7 @@
 #include <mutex>
 
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 #include "detail.hpp"
@@ -127,18 +128,115 @@ std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeo
     return regions;
 }
 
+/// Nodes per axis of a grid with `cells` (1 along z in 2D).
+Eigen::Vector3i node_counts(const Eigen::Vector3i& cells, int dim) {
+    return {cells[0] + 1, cells[1] + 1, dim == 3 ? cells[2] + 1 : 1};
+}
+
+/// Per level-(k+1) grid DOF, its index among the present DOFs g.fine_dofs (-1: absent).
+std::vector<Index> fine_local_index(const StepGeometry& g) {
+    std::vector<Index> fine_local(static_cast<std::size_t>(g.dim * grid_nodes(g.fine_cells, g.dim)),
+                                  -1);
+    for (Index l = 0; l < g.fine_dofs.size(); ++l)
+        fine_local[static_cast<std::size_t>(g.fine_dofs[l])] = l;
+    return fine_local;
+}
+
+/// S: the wavelets (rows of W) with a nonzero on a level-(k+1) node of the box [lo, hi], sorted,
+/// and local[w] = the position of w in S (local must hold -1 for every wavelet on entry).
+void box_wavelets(const SparseMatrix& W, const std::vector<Index>& fine_local,
+                  const Eigen::Vector3i& nf, int dim, const Eigen::Vector3i& lo,
+                  const Eigen::Vector3i& hi, std::vector<Index>& local, std::vector<Index>& S) {
+    S.clear();
+    for (int z = lo[2]; z <= hi[2]; ++z)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+            for (int x = lo[0]; x <= hi[0]; ++x) {
+                const Index v = x + nf[0] * (y + nf[1] * z);
+                for (int d = 0; d < dim; ++d) {
+                    const Index l = fine_local[static_cast<std::size_t>(dim * v + d)];
+                    if (l < 0) continue;
+                    for (SparseMatrix::InnerIterator it(W, l); it; ++it) {
+                        const Index w = static_cast<Index>(it.row());
+                        if (local[static_cast<std::size_t>(w)] < 0) {
+                            local[static_cast<std::size_t>(w)] = 0;
+                            S.push_back(w);
+                        }
+                    }
+                }
+            }
+    std::sort(S.begin(), S.end());
+    for (std::size_t s = 0; s < S.size(); ++s)
+        local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
+}
+
+/// B[S, S] (both triangles), local[w] the position of wavelet w in S or -1.
+SparseMatrix principal_block(const SparseMatrix& B, const std::vector<Index>& S,
+                             const std::vector<Index>& local) {
+    const Index ns = static_cast<Index>(S.size());
+    std::vector<Triplet> bt;
+    for (Index s = 0; s < ns; ++s)
+        for (SparseMatrix::InnerIterator it(B, S[static_cast<std::size_t>(s)]); it; ++it) {
+            const Index r = local[static_cast<std::size_t>(it.row())];
+            if (r >= 0) bt.emplace_back(r, s, it.value());
+        }
+    SparseMatrix b(ns, ns);
+    b.setFromTriplets(bt.begin(), bt.end());
+    return b;
+}
+
+/// The columns `cols` of M as a dense block over the rows where they have a nonzero (`rows`,
+/// sorted).
+Matrix column_block(const SparseMatrix& M, const IndexVector& cols, IndexVector& rows) {
+    std::vector<Index> r;
+    for (const Index c : cols)
+        for (SparseMatrix::InnerIterator it(M, c); it; ++it)
+            r.push_back(static_cast<Index>(it.row()));
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    rows = Eigen::Map<const IndexVector>(r.data(), static_cast<Index>(r.size()));
+    Matrix block = Matrix::Zero(rows.size(), cols.size());
+    for (Index q = 0; q < cols.size(); ++q)
+        for (SparseMatrix::InnerIterator it(M, cols[q]); it; ++it)
+            block(std::lower_bound(r.begin(), r.end(), static_cast<Index>(it.row())) - r.begin(),
+                  q) = it.value();
+    return block;
+}
+
+/// Solves b x = rhs and appends -x as entries (rows[q], S[s]) of Z.
+void append_solution(const SparseMatrix& b, const Matrix& rhs, const std::vector<Index>& rows,
+                     const std::vector<Index>& S, std::vector<Triplet>& part) {
+    const Matrix x = local_solve(b, rhs);
+    part.reserve(part.size() + static_cast<std::size_t>(x.size()));
+    for (Index q = 0; q < x.cols(); ++q)
+        for (Index s = 0; s < x.rows(); ++s)
+            if (x(s, q) != 0.0)
+                part.emplace_back(rows[static_cast<std::size_t>(q)], S[static_cast<std::size_t>(s)],
+                                  -x(s, q));
+}
+
+/// Z (#rows by #cols) from per-region entries (duplicates summed), freeing them on the way.
+SparseMatrix from_parts(std::vector<std::vector<Triplet>>& parts, Index rows, Index cols) {
+    std::size_t total = 0;
+    for (const auto& p : parts) total += p.size();
+    std::vector<Triplet> t;
+    t.reserve(total);
+    for (auto& p : parts) {
+        t.insert(t.end(), p.begin(), p.end());
+        std::vector<Triplet>().swap(p);
+    }
+    SparseMatrix Z(rows, cols);
+    Z.setFromTriplets(t.begin(), t.end());
+    return Z;
+}
+
 }  // namespace
 
 SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
                          const StepGeometry& g, int rings, int patch) {
     const int dim = g.dim;
     const Index nw = static_cast<Index>(W.rows());
-    const Eigen::Vector3i nf(g.fine_cells[0] + 1, g.fine_cells[1] + 1,
-                             dim == 3 ? g.fine_cells[2] + 1 : 1);
-    const Index fine_grid_dofs = dim * grid_nodes(g.fine_cells, dim);
-    std::vector<Index> fine_local(static_cast<std::size_t>(fine_grid_dofs), -1);
-    for (Index l = 0; l < g.fine_dofs.size(); ++l)
-        fine_local[static_cast<std::size_t>(g.fine_dofs[l])] = l;
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
+    const std::vector<Index> fine_local = fine_local_index(g);
 
     // Kept coarse DOFs grouped by node: rows [first[n], first[n+1]) of Z belong to node nodes[n].
     std::vector<Index> nodes, first;
@@ -163,39 +261,11 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
 #pragma omp for schedule(dynamic, 1)
         for (Index n = 0; n < num_regions; ++n) {
             try {
-                // S: wavelets with a nonzero on a fine node of the region.
                 const Region& region = regions[static_cast<std::size_t>(n)];
-                S.clear();
-                for (int z = region.lo[2]; z <= region.hi[2]; ++z)
-                    for (int y = region.lo[1]; y <= region.hi[1]; ++y)
-                        for (int x = region.lo[0]; x <= region.hi[0]; ++x) {
-                            const Index v = x + nf[0] * (y + nf[1] * z);
-                            for (int d = 0; d < dim; ++d) {
-                                const Index l = fine_local[static_cast<std::size_t>(dim * v + d)];
-                                if (l < 0) continue;
-                                for (SparseMatrix::InnerIterator it(W, l); it; ++it) {
-                                    const Index w = static_cast<Index>(it.row());
-                                    if (local[static_cast<std::size_t>(w)] < 0) {
-                                        local[static_cast<std::size_t>(w)] = 0;
-                                        S.push_back(w);
-                                    }
-                                }
-                            }
-                        }
-                std::sort(S.begin(), S.end());
+                box_wavelets(W, fine_local, nf, dim, region.lo, region.hi, local, S);
                 const Index ns = static_cast<Index>(S.size());
-                for (Index s = 0; s < ns; ++s) local[static_cast<std::size_t>(S[s])] = s;
-
-                // b = B[S, S] and the right-hand sides R[S, DOFs of the region's nodes].
-                SparseMatrix b(ns, ns);
-                std::vector<Triplet> bt;
-                for (Index s = 0; s < ns; ++s)
-                    for (SparseMatrix::InnerIterator it(B, S[static_cast<std::size_t>(s)]); it;
-                         ++it) {
-                        const Index r = local[static_cast<std::size_t>(it.row())];
-                        if (r >= 0) bt.emplace_back(r, s, it.value());
-                    }
-                b.setFromTriplets(bt.begin(), bt.end());
+                const SparseMatrix b = principal_block(B, S, local);
+                // The right-hand sides R[S, DOFs of the region's nodes].
                 std::vector<Index> rows;
                 for (const Index m : region.members)
                     for (Index r = first[static_cast<std::size_t>(m)];
@@ -211,14 +281,7 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
                     }
                 for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
                 if (ns == 0) continue;
-                const Matrix x = local_solve(b, rhs);
-                auto& part = parts[static_cast<std::size_t>(n)];
-                part.reserve(static_cast<std::size_t>(ns * nr));
-                for (Index q = 0; q < nr; ++q)
-                    for (Index s = 0; s < ns; ++s)
-                        if (x(s, q) != 0.0)
-                            part.emplace_back(rows[static_cast<std::size_t>(q)],
-                                              S[static_cast<std::size_t>(s)], -x(s, q));
+                append_solution(b, rhs, rows, S, parts[static_cast<std::size_t>(n)]);
             } catch (...) {
                 const std::lock_guard<std::mutex> lock(mutex);
                 if (!error) error = std::current_exception();
@@ -226,17 +289,150 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
         }
     }
     if (error) std::rethrow_exception(error);
-    std::size_t total = 0;
-    for (const auto& p : parts) total += p.size();
-    std::vector<Triplet> t;
-    t.reserve(total);
-    for (auto& p : parts) {
-        t.insert(t.end(), p.begin(), p.end());
-        std::vector<Triplet>().swap(p);
+    return from_parts(parts, static_cast<Index>(g.coarse_dofs.size()), nw);
+}
+
+std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
+                                          const material::ElementMaterials& materials,
+                                          const IndexVector& fine_dofs,
+                                          const Eigen::Vector3i& cells) {
+    const int dim = mesh.dim();
+    CG_VERIFY(materials.size() == mesh.num_elements(),
+              "mra: cell localization got {} element materials for {} elements", materials.size(),
+              mesh.num_elements());
+    std::vector<Index> present(static_cast<std::size_t>(mesh.num_dofs()), -1);
+    for (Index l = 0; l < fine_dofs.size(); ++l)
+        present[static_cast<std::size_t>(fine_dofs[l])] = l;
+    const Eigen::Vector3d spacing =
+        (mesh.grid->max - mesh.grid->min).cwiseQuotient(cells.cast<double>());
+    const Index num_cells = cell_count(cells, dim);
+    std::vector<std::vector<Index>> members(static_cast<std::size_t>(num_cells));
+    for (Index e = 0; e < mesh.num_elements(); ++e) {
+        const Eigen::VectorXd centre = mesh.element_positions(e).colwise().mean().transpose();
+        Index t = 0;
+        for (int d = dim - 1; d >= 0; --d) {
+            const int c = std::clamp(
+                static_cast<int>(std::floor((centre[d] - mesh.grid->min[d]) / spacing[d])), 0,
+                cells[d] - 1);
+            t = t * cells[d] + c;
+        }
+        members[static_cast<std::size_t>(t)].push_back(e);
     }
-    SparseMatrix Z(static_cast<Index>(g.coarse_dofs.size()), nw);
-    Z.setFromTriplets(t.begin(), t.end());
-    return Z;
+    std::vector<CellStiffness> parts;
+    for (Index t = 0; t < num_cells; ++t) {
+        const auto& elems = members[static_cast<std::size_t>(t)];
+        if (elems.empty()) continue;
+        std::vector<Index> dofs;
+        for (const Index e : elems)
+            for (Index a = 0; a < mesh.elements.cols(); ++a)
+                for (int d = 0; d < dim; ++d) {
+                    const Index l =
+                        present[static_cast<std::size_t>(dim * mesh.elements(e, a) + d)];
+                    if (l >= 0) dofs.push_back(l);
+                }
+        std::sort(dofs.begin(), dofs.end());
+        dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
+        CellStiffness part;
+        part.cell = Eigen::Vector3i::Zero();
+        for (Index rest = t, d = 0; d < dim; rest /= cells[d], ++d)
+            part.cell[d] = static_cast<int>(rest % cells[d]);
+        part.dofs = Eigen::Map<const IndexVector>(dofs.data(), static_cast<Index>(dofs.size()));
+        part.A = Matrix::Zero(part.dofs.size(), part.dofs.size());
+        for (const Index e : elems) {
+            const Matrix Ke = fem::element_stiffness(mesh.type, mesh.element_positions(e),
+                                                     material::tensor(materials.of(e), dim));
+            std::vector<Index> pos(static_cast<std::size_t>(Ke.rows()), -1);
+            for (Index a = 0; a < mesh.elements.cols(); ++a)
+                for (int d = 0; d < dim; ++d) {
+                    const Index l =
+                        present[static_cast<std::size_t>(dim * mesh.elements(e, a) + d)];
+                    if (l >= 0)
+                        pos[static_cast<std::size_t>(dim * a + d)] = static_cast<Index>(
+                            std::lower_bound(dofs.begin(), dofs.end(), l) - dofs.begin());
+                }
+            for (Index i = 0; i < Ke.rows(); ++i)
+                for (Index j = 0; j < Ke.cols(); ++j)
+                    if (pos[static_cast<std::size_t>(i)] >= 0 &&
+                        pos[static_cast<std::size_t>(j)] >= 0)
+                        part.A(pos[static_cast<std::size_t>(i)],
+                               pos[static_cast<std::size_t>(j)]) += Ke(i, j);
+        }
+        parts.push_back(std::move(part));
+    }
+    return parts;
+}
+
+SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
+                              const SparseMatrix& WPhi, const SparseMatrix& CdPhi,
+                              const std::vector<CellStiffness>& parts, const StepGeometry& g,
+                              int rings) {
+    const int dim = g.dim;
+    const Index nw = static_cast<Index>(W.rows()), nc = static_cast<Index>(CdPhi.rows());
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
+    const std::vector<Index> fine_local = fine_local_index(g);
+    const Index num_parts = static_cast<Index>(parts.size());
+    std::vector<std::vector<Triplet>> out(static_cast<std::size_t>(num_parts));
+    std::exception_ptr error;
+    std::mutex mutex;
+#pragma omp parallel if (num_parts >= kMinParallelNodes)
+    {
+        std::vector<Index> local(static_cast<std::size_t>(nw), -1);
+        std::vector<Index> S;
+#pragma omp for schedule(dynamic, 1)
+        for (Index n = 0; n < num_parts; ++n) {
+            try {
+                const CellStiffness& part = parts[static_cast<std::size_t>(n)];
+                // R^T = (W Φ)[:, T] A_T (C^† Φ)[:, T]^T, over the rows that touch T.
+                IndexVector wrows, crows;
+                const Matrix wt = column_block(WPhi, part.dofs, wrows);
+                const Matrix ct = column_block(CdPhi, part.dofs, crows);
+                if (wrows.size() == 0 || crows.size() == 0) continue;
+                const Matrix rt = wt * part.A * ct.transpose();
+                // The region: level-(k+1) nodes within `rings` of T (its nodes 2c .. 2c + 2).
+                const Eigen::Vector3i lo = (2 * part.cell.array() - rings).max(0);
+                const Eigen::Vector3i hi = (2 * part.cell.array() + 2 + rings).min(nf.array() - 1);
+                box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
+                const Index ns = static_cast<Index>(S.size());
+                const SparseMatrix b = principal_block(B, S, local);
+                Matrix rhs = Matrix::Zero(ns, crows.size());
+                for (Index r = 0; r < wrows.size(); ++r) {
+                    const Index s = local[static_cast<std::size_t>(wrows[r])];
+                    if (s >= 0) rhs.row(s) = rt.row(r);
+                }
+                for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
+                if (ns == 0) continue;
+                append_solution(b, rhs, std::vector<Index>(crows.begin(), crows.end()), S,
+                                out[static_cast<std::size_t>(n)]);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(mutex);
+                if (!error) error = std::current_exception();
+            }
+        }
+    }
+    if (error) std::rethrow_exception(error);
+    return from_parts(out, nc, nw);
+}
+
+SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
+                                const StepGeometry& g, const Matrix& rig_fine,
+                                const Matrix& fine_positions, double rotation_scale) {
+    const Vector sums = C * Vector::Ones(C.cols());
+    Vector scale(sums.size());
+    for (Index i = 0; i < sums.size(); ++i) scale[i] = sums[i] != 0.0 ? 1.0 / sums[i] : 0.0;
+    SparseMatrix Y = scale.asDiagonal() * C;
+    const Index num_fine = grid_nodes(g.fine_cells, g.dim);
+    std::vector<int> present(static_cast<std::size_t>(num_fine), 0);
+    for (Index l = 0; l < g.fine_dofs.size(); ++l)
+        ++present[static_cast<std::size_t>(g.fine_dofs[l] / g.dim)];
+    std::vector<char> skip(static_cast<std::size_t>(num_fine), 0);
+    for (Index j = 0; j < num_fine; ++j)
+        skip[static_cast<std::size_t>(j)] = present[static_cast<std::size_t>(j)] != g.dim;
+    correct_invariance(Y, g, skip, Matrix(C * rig_fine), rig_fine, fine_positions, rotation_scale);
+    const SparseMatrix YCt = Y * SparseMatrix(C.transpose());
+    SparseMatrix X = Y + C_dagger - SparseMatrix(YCt * C_dagger);
+    X.prune(0.0);
+    X.makeCompressed();
+    return X;
 }
 
 void truncate_rows(SparseMatrix& M, double tau) {

@@ -17,6 +17,7 @@ namespace coarsegrain::mra {
 /// - "radius": number >= 1, "inf", or an array of levels - 1 of them, entry k-1 for the step
 ///   that builds level k (default "inf": global solves);
 /// - "radius_grid": "fine" (default) | "coarse";
+/// - "localization": "node" (default) | "cell" (Localization; finite radii only);
 /// - "truncation": number in [0, 1) (default 1e-7, Options::truncation);
 /// - "invariance": true (default) | false;
 /// - "dirichlet": "constrain" (default) | "eliminate" | "penalty" | "diagonal_penalty".

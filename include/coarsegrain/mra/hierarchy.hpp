@@ -77,6 +77,36 @@
 /// localized radii (with per-step values, e.g. global for the coarse steps) remain the option
 /// for large 3D models, at a much larger error.
 ///
+/// ## Cell-wise localization (Options::localization)
+/// Localization::Cell splits R by coarse cells, as the element correctors of Localized
+/// Orthogonal Decomposition, with a left inverse that reproduces rigid motions (the library's
+/// injection C^† does not; detail::rigid_left_inverse, linear refinement only). Same problems
+/// and columns as the table above (bench_mra_localization 32 3 l, no truncation; err = coarsest
+/// energy error with / without the invariance correction; dens = C̃ of the finest step; build
+/// seconds, 1 thread, loaded machine):
+///
+/// | rho | square node  | square cell     | layered node  | layered cell | density   | build s   |
+/// |-----|--------------|-----------------|---------------|--------------|-----------|-----------|
+/// | 1c  | 0.99 / 0.96  | 0.72 / 0.80     | 0.998 / 0.73  | 0.96 / 0.96  | 0.05/0.18 | 0.06/0.4  |
+/// | 2c  | 0.98 / 0.91  | 0.40 / 0.47     | 0.998 / 0.30  | 0.85 / 0.85  | 0.11/0.26 | 0.2/0.7   |
+/// | 4c  | 0.78 / 0.85  | 0.071 / 0.073   | 0.996 / 0.055 | 0.65 / 0.65  | 0.26/0.44 | 0.6/1.5   |
+/// | 6c  | 0.16 / 0.27  | 0.0117 / 0.0117 | 0.997 / 0.036 | 0.41 / 0.41  | 0.44/0.62 | 0.7/2.1   |
+///
+/// (density and build: node / cell, square; global: 0.0116 / 0.0349.) On the inclusions cell-wise
+/// localization reaches the global error at 6c and is 10x more accurate than node-wise at 4c, and
+/// the invariance correction no longer matters (the construction reproduces rigid motions by itself
+/// away from the boundary). On the layered composite it behaves like the invariance correction
+/// (same explanation) and is far worse than node-wise without correction. The accordion scene at
+/// 32x8x8 (E 1e7 / 1e4, 3 levels, rho in fine rings, invariance on, truncation 1e-7, coarsest
+/// error node / cell): linear rho = 1: 0.9999 / 0.992, 2: 0.999 / 0.992, 3: 0.999 / 0.992 (level 2:
+/// 0.997 / 0.63), build 3 s / 25 s at rho = 2; Dirac (injection C^†) rho = 1: 0.81 / 0.99, 2: 0.98
+/// / 0.93. With global solves at the coarse step and cell / node at the fine one: rho = 2: 0.63 /
+/// 0.997, rho = 4: 0.72 / 0.999 (not monotonic; builds 26 s / 3 s and 70 s / 21 s). So it does not
+/// cure the 3D locking. Costs: C̃ 2x denser and builds 2-8x longer than node-wise at the same rho
+/// (one factorization per cell, regions one cell wider, right-hand sides through Φ^{k+1} at coarser
+/// steps). With the dense Moore-Penrose C^† (an experiment) the square gave 0.83 / 0.45 / 0.095 /
+/// 0.012 at 1c / 2c / 4c / 6c, at C̃ density 1.
+///
 /// ## Cost in 3D (bench/bench_mra)
 /// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
 /// clamped at x = 0, gravity), hex grids, 3 levels (coarsest = grid / 4), truncation 1e-7,
@@ -129,6 +159,7 @@
 
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 
@@ -142,11 +173,25 @@ enum class RadiusGrid {
     Coarse,  ///< rings of the coarser grid (level k), the paper's wording: 4 rho + 1 fine nodes
 };
 
+/// How the solves for Z are localized when the radius is finite (Sec. 3.5).
+enum class Localization {
+    /// Per coarse node i (the paper): B[S_i, S_i] z_i = -R[S_i, i] on the wavelets S_i near i.
+    Node,
+    /// Per coarse cell T, as the correctors of Localized Orthogonal Decomposition (Malqvist and
+    /// Peterseim): R = sum_T R^T with R^T = W Φ^{k+1} A_T Φ^{k+1,T} C^{†,T}, A_T the fine
+    /// stiffness of the fine elements inside T (sum_T A_T = A^q); each R^T is solved on the
+    /// wavelets within rho rings of T and Z = sum_T Z^T. Needs the element materials. With the
+    /// linear refinement C^† is replaced by a sparse left inverse that reproduces rigid motions
+    /// (then the corrections of a rigid motion cancel cell by cell); see the table above.
+    Cell,
+};
+
 /// "dirac", "linear" / "eliminate", "penalty", "diagonal_penalty", "constrain" / "fine",
-/// "coarse".
+/// "coarse" / "node", "cell".
 std::string refinement_name(Refinement r);
 std::string dirichlet_name(DirichletTreatment t);
 std::string radius_grid_name(RadiusGrid g);
+std::string localization_name(Localization l);
 
 /// Options of the hierarchy (Algorithm 1).
 struct Options {
@@ -166,6 +211,9 @@ struct Options {
     /// (at least as accurate as patch 1 with the same rho) and divides the number of
     /// factorizations by patch^dim.
     int patch = 1;
+    /// Node- or cell-wise localization (finite radii only; Cell needs patch 1 and the Eliminate
+    /// or Constrain treatment, whose fine operator is the sum of the element matrices).
+    Localization localization = Localization::Node;
     /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, an entry
     /// C̃_ij is dropped if |C̃_ij| < tau max_l |C̃_il| (relative to the largest coefficient of
     /// the same basis function). A^k = C̃^k A^{k+1} C̃^{k,T} is then the exact Galerkin matrix of
@@ -195,8 +243,8 @@ struct Level {
     IndexVector dofs;
     IndexVector dropped_dofs;  ///< grid DOFs of level k without a basis function
     SparseMatrix C;            ///< canonical refinement C^k, #dofs by #dofs(k+1) (Eq. 6)
-    SparseMatrix C_dagger;     ///< left inverse C^{k,†} (Eq. 10)
-    SparseMatrix W;            ///< kernel W^k, #wavelets by #dofs(k+1)
+    SparseMatrix C_dagger;   ///< left inverse C^{k,†} (Eq. 10; rigid one for Localization::Cell)
+    SparseMatrix W;          ///< kernel W^k, #wavelets by #dofs(k+1)
     SparseMatrix C_adapted;  ///< C̃^k = C^{k,†} + Z W^k (Eq. 11), localized/corrected/truncated
     SparseMatrix A;          ///< A^k = C̃^k A^{k+1} C̃^{k,T} (Alg. 1 line 7)
     SparseMatrix B;          ///< B^k = W^k A^{k+1} W^{k,T} (Alg. 1 line 2)
@@ -240,10 +288,14 @@ struct Hierarchy {
 /// @param[in] K           fine stiffness (num_dofs square, both triangles)
 /// @param[in] fixed_dofs  sorted Dirichlet DOFs (homogeneous)
 /// @param[in] options     see Options
+/// @param[in] materials   element materials of `mesh` (K must be their stiffness); needed only
+///                        by Localization::Cell with a finite radius
 /// @throws Error if the mesh is not a grid, the cells are not divisible by 2^(levels-1), an
-///         option is out of range, or a wavelet stiffness B^k is not positive definite
+///         option is out of range, cell localization lacks the materials, or a wavelet
+///         stiffness B^k is not positive definite
 Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
-                          const std::vector<Index>& fixed_dofs, const Options& options);
+                          const std::vector<Index>& fixed_dofs, const Options& options,
+                          const material::ElementMaterials* materials = nullptr);
 
 /// Restricts a fine vector (fine grid DOFs) to the hierarchy's fine DOFs and coarse-grains it to
 /// level k (Sec. 3.6): g^k = C̃^k ... C̃^{q-1} g^q.
