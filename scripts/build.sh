@@ -7,10 +7,7 @@ flavour=${1:-release}
 shift || true
 case "$flavour" in
   release) dir=build/release; flags=(-DCMAKE_BUILD_TYPE=Release) ;;
-  # -O1 -g1 (line tables): instrumented code at -O2 -g took 1.7x the compile time (125 s
-  # against 72 s user for src/homogenize/coarse_maps.cpp), the bulk of the test command's time.
   asan)    dir=build/asan; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCOARSEGRAIN_SANITIZE=ON
-                                  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
                                   -DCOARSEGRAIN_BUILD_BENCH=OFF) ;;
   *) echo "usage: scripts/build.sh [release|asan] [targets...]" >&2; exit 2 ;;
 esac
