@@ -229,6 +229,31 @@ SparseMatrix from_parts(std::vector<std::vector<Triplet>>& parts, Index rows, In
     return Z;
 }
 
+/// Runs solve(n, local, S) for every region n in [0, count) on all OpenMP threads (dynamic
+/// schedule: regions differ in size), each thread with its own scratch: `local`, nw entries of -1
+/// that solve() must restore (the wavelet -> region row map), and S. The first exception thrown
+/// is rethrown after the loop.
+template <class F>
+void for_each_region(Index count, Index nw, F&& solve) {
+    std::exception_ptr error;
+    std::mutex mutex;
+#pragma omp parallel if (count >= kMinParallelNodes)
+    {
+        std::vector<Index> local(static_cast<std::size_t>(nw), -1);
+        std::vector<Index> S;
+#pragma omp for schedule(dynamic, 1)
+        for (Index n = 0; n < count; ++n) {
+            try {
+                solve(n, local, S);
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(mutex);
+                if (!error) error = std::current_exception();
+            }
+        }
+    }
+    if (error) std::rethrow_exception(error);
+}
+
 }  // namespace
 
 SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
@@ -252,43 +277,30 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
     const Index num_regions = static_cast<Index>(regions.size());
 
     std::vector<std::vector<Triplet>> parts(static_cast<std::size_t>(num_regions));
-    std::exception_ptr error;
-    std::mutex mutex;
-#pragma omp parallel if (num_regions >= kMinParallelNodes)
-    {
-        std::vector<Index> local(static_cast<std::size_t>(nw), -1);
-        std::vector<Index> S;
-#pragma omp for schedule(dynamic, 1)
-        for (Index n = 0; n < num_regions; ++n) {
-            try {
-                const Region& region = regions[static_cast<std::size_t>(n)];
-                box_wavelets(W, fine_local, nf, dim, region.lo, region.hi, local, S);
-                const Index ns = static_cast<Index>(S.size());
-                const SparseMatrix b = principal_block(B, S, local);
-                // The right-hand sides R[S, DOFs of the region's nodes].
-                std::vector<Index> rows;
-                for (const Index m : region.members)
-                    for (Index r = first[static_cast<std::size_t>(m)];
-                         r < first[static_cast<std::size_t>(m) + 1]; ++r)
-                        rows.push_back(r);
-                const Index nr = static_cast<Index>(rows.size());
-                Matrix rhs = Matrix::Zero(ns, nr);
-                for (Index q = 0; q < nr; ++q)
-                    for (SparseMatrix::InnerIterator it(R, rows[static_cast<std::size_t>(q)]); it;
-                         ++it) {
-                        const Index r = local[static_cast<std::size_t>(it.row())];
-                        if (r >= 0) rhs(r, q) = it.value();
-                    }
-                for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
-                if (ns == 0) continue;
-                append_solution(b, rhs, rows, S, parts[static_cast<std::size_t>(n)]);
-            } catch (...) {
-                const std::lock_guard<std::mutex> lock(mutex);
-                if (!error) error = std::current_exception();
-            }
-        }
-    }
-    if (error) std::rethrow_exception(error);
+    for_each_region(
+        num_regions, nw, [&](Index n, std::vector<Index>& local, std::vector<Index>& S) {
+            const Region& region = regions[static_cast<std::size_t>(n)];
+            box_wavelets(W, fine_local, nf, dim, region.lo, region.hi, local, S);
+            const Index ns = static_cast<Index>(S.size());
+            const SparseMatrix b = principal_block(B, S, local);
+            // The right-hand sides R[S, DOFs of the region's nodes].
+            std::vector<Index> rows;
+            for (const Index m : region.members)
+                for (Index r = first[static_cast<std::size_t>(m)];
+                     r < first[static_cast<std::size_t>(m) + 1]; ++r)
+                    rows.push_back(r);
+            const Index nr = static_cast<Index>(rows.size());
+            Matrix rhs = Matrix::Zero(ns, nr);
+            for (Index q = 0; q < nr; ++q)
+                for (SparseMatrix::InnerIterator it(R, rows[static_cast<std::size_t>(q)]); it;
+                     ++it) {
+                    const Index r = local[static_cast<std::size_t>(it.row())];
+                    if (r >= 0) rhs(r, q) = it.value();
+                }
+            for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
+            if (ns == 0) return;
+            append_solution(b, rhs, rows, S, parts[static_cast<std::size_t>(n)]);
+        });
     return from_parts(parts, static_cast<Index>(g.coarse_dofs.size()), nw);
 }
 
@@ -372,44 +384,30 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
     const std::vector<Index> fine_local = fine_local_index(g);
     const Index num_parts = static_cast<Index>(parts.size());
     std::vector<std::vector<Triplet>> out(static_cast<std::size_t>(num_parts));
-    std::exception_ptr error;
-    std::mutex mutex;
-#pragma omp parallel if (num_parts >= kMinParallelNodes)
-    {
-        std::vector<Index> local(static_cast<std::size_t>(nw), -1);
-        std::vector<Index> S;
-#pragma omp for schedule(dynamic, 1)
-        for (Index n = 0; n < num_parts; ++n) {
-            try {
-                const CellStiffness& part = parts[static_cast<std::size_t>(n)];
-                // R^T = (W Φ)[:, T] A_T (C^† Φ)[:, T]^T, over the rows that touch T.
-                IndexVector wrows, crows;
-                const Matrix wt = column_block(WPhi, part.dofs, wrows);
-                const Matrix ct = column_block(CdPhi, part.dofs, crows);
-                if (wrows.size() == 0 || crows.size() == 0) continue;
-                const Matrix rt = wt * part.A * ct.transpose();
-                // The region: level-(k+1) nodes within `rings` of T (its nodes 2c .. 2c + 2).
-                const Eigen::Vector3i lo = (2 * part.cell.array() - rings).max(0);
-                const Eigen::Vector3i hi = (2 * part.cell.array() + 2 + rings).min(nf.array() - 1);
-                box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
-                const Index ns = static_cast<Index>(S.size());
-                const SparseMatrix b = principal_block(B, S, local);
-                Matrix rhs = Matrix::Zero(ns, crows.size());
-                for (Index r = 0; r < wrows.size(); ++r) {
-                    const Index s = local[static_cast<std::size_t>(wrows[r])];
-                    if (s >= 0) rhs.row(s) = rt.row(r);
-                }
-                for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
-                if (ns == 0) continue;
-                append_solution(b, rhs, std::vector<Index>(crows.begin(), crows.end()), S,
-                                out[static_cast<std::size_t>(n)]);
-            } catch (...) {
-                const std::lock_guard<std::mutex> lock(mutex);
-                if (!error) error = std::current_exception();
-            }
+    for_each_region(num_parts, nw, [&](Index n, std::vector<Index>& local, std::vector<Index>& S) {
+        const CellStiffness& part = parts[static_cast<std::size_t>(n)];
+        // R^T = (W Φ)[:, T] A_T (C^† Φ)[:, T]^T, over the rows that touch T.
+        IndexVector wrows, crows;
+        const Matrix wt = column_block(WPhi, part.dofs, wrows);
+        const Matrix ct = column_block(CdPhi, part.dofs, crows);
+        if (wrows.size() == 0 || crows.size() == 0) return;
+        const Matrix rt = wt * part.A * ct.transpose();
+        // The region: level-(k+1) nodes within `rings` of T (its nodes 2c .. 2c + 2).
+        const Eigen::Vector3i lo = (2 * part.cell.array() - rings).max(0);
+        const Eigen::Vector3i hi = (2 * part.cell.array() + 2 + rings).min(nf.array() - 1);
+        box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
+        const Index ns = static_cast<Index>(S.size());
+        const SparseMatrix b = principal_block(B, S, local);
+        Matrix rhs = Matrix::Zero(ns, crows.size());
+        for (Index r = 0; r < wrows.size(); ++r) {
+            const Index s = local[static_cast<std::size_t>(wrows[r])];
+            if (s >= 0) rhs.row(s) = rt.row(r);
         }
-    }
-    if (error) std::rethrow_exception(error);
+        for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
+        if (ns == 0) return;
+        append_solution(b, rhs, std::vector<Index>(crows.begin(), crows.end()), S,
+                        out[static_cast<std::size_t>(n)]);
+    });
     return from_parts(out, nc, nw);
 }
 
