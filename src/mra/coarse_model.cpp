@@ -196,6 +196,12 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
         v->fail_unless(s == "node" || s == "cell", "expected \"node\" or \"cell\", got \"{}\"", s);
         o.localization = s == "node" ? Localization::Node : Localization::Cell;
     }
+    if (auto v = r.find("measurement")) {
+        const std::string s = v->string();
+        v->fail_unless(s == "canonical" || s == "stiffness",
+                       "expected \"canonical\" or \"stiffness\", got \"{}\"", s);
+        o.measurement = s == "canonical" ? Measurement::Canonical : Measurement::Stiffness;
+    }
     if (auto v = r.find("patch")) {
         o.patch = v->integer();
         v->fail_unless(o.patch >= 1, "expected an integer >= 1, got {}", o.patch);
@@ -277,6 +283,7 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
                            {"dirichlet", dirichlet_name(o.dirichlet)}};
     m.report["options"]["patch"] = o.patch;
     m.report["options"]["localization"] = localization_name(o.localization);
+    m.report["options"]["measurement"] = measurement_name(o.measurement);
     nlohmann::json levels = nlohmann::json::array();
     for (const Level& L : h.levels) {
         levels.push_back(

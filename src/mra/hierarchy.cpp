@@ -230,6 +230,10 @@ std::string radius_grid_name(RadiusGrid g) { return g == RadiusGrid::Fine ? "fin
 
 std::string localization_name(Localization l) { return l == Localization::Node ? "node" : "cell"; }
 
+std::string measurement_name(Measurement m) {
+    return m == Measurement::Canonical ? "canonical" : "stiffness";
+}
+
 Index Hierarchy::fine_grid_dofs() const { return dim * grid_nodes(fine_cells, dim); }
 
 const Level& Hierarchy::level(int k) const {
@@ -374,8 +378,12 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         const std::vector<Index> coincident = coincident_nodes(L.cells, dim);
         {
             const Phase phase(tag + "canonical", &h.timings);
+            SparseMatrix C_node = canonical_refinement(L.cells, dim, options.refinement);
+            if (k == q - 1 && options.measurement == Measurement::Stiffness)
+                C_node = weighted_refinement(std::move(C_node), coincident,
+                                             stiffness_weights(K, mesh.elements, dim));
             RefinementOperators ops = refinement_operators(
-                canonical_refinement(L.cells, dim, options.refinement), coincident, dim, dofs_next,
+                C_node, coincident, dim, dofs_next,
                 options.dirichlet != DirichletTreatment::Eliminate);
             L.dofs = std::move(ops.coarse_dofs);
             L.dropped_dofs = std::move(ops.dropped_dofs);

@@ -76,6 +76,38 @@ SparseMatrix expand_to_dofs(const SparseMatrix& S, int dim) {
     return out;
 }
 
+Vector stiffness_weights(const SparseMatrix& K, const IndexMatrix& elements, int dim) {
+    const Index nodes = K.rows() / dim;
+    CG_VERIFY(K.rows() == dim * nodes && K.cols() == K.rows(),
+              "mra: stiffness weights need a square stiffness of dim * #nodes rows, got {}x{}",
+              K.rows(), K.cols());
+    Vector count = Vector::Zero(nodes);
+    for (Index e = 0; e < elements.rows(); ++e)
+        for (Index a = 0; a < elements.cols(); ++a) count[elements(e, a)] += 1;
+    Vector w(nodes);
+    for (Index j = 0; j < nodes; ++j) {
+        double trace = 0;
+        for (int d = 0; d < dim; ++d) trace += K.coeff(dim * j + d, dim * j + d);
+        w[j] = trace / (dim * count[j]);
+        CG_VERIFY(std::isfinite(w[j]) && w[j] > 0,
+                  "mra: node {} has no positive stiffness weight ({}; an unused node?)", j, w[j]);
+    }
+    return w;
+}
+
+SparseMatrix weighted_refinement(SparseMatrix C_node, const std::vector<Index>& coincident,
+                                 const Vector& w) {
+    CG_VERIFY(C_node.cols() == w.size() &&
+                  C_node.rows() == static_cast<Index>(coincident.size()),
+              "mra: weighted refinement of a {}x{} refinement with {} weights and {} coincident "
+              "nodes",
+              C_node.rows(), C_node.cols(), w.size(), coincident.size());
+    for (Index j = 0; j < C_node.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(C_node, j); it; ++it)
+            it.valueRef() *= w[j] / w[coincident[static_cast<std::size_t>(it.row())]];
+    return C_node;
+}
+
 RefinementOperators refinement_operators(const SparseMatrix& C_node,
                                          const std::vector<Index>& coincident, int dim,
                                          const IndexVector& fine_dofs, bool keep_boundary_rows) {

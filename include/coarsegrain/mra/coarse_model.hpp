@@ -18,6 +18,7 @@ namespace coarsegrain::mra {
 ///   that builds level k (default "inf": global solves);
 /// - "radius_grid": "fine" (default) | "coarse";
 /// - "localization": "node" (default) | "cell" (Localization; finite radii only);
+/// - "measurement": "canonical" (default) | "stiffness" (Measurement; no effect on Dirac);
 /// - "truncation": number in [0, 1) (default 1e-7, Options::truncation);
 /// - "invariance": true (default) | false;
 /// - "dirichlet": "constrain" (default) | "eliminate" | "penalty" | "diagonal_penalty".

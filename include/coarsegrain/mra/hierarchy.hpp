@@ -186,12 +186,24 @@ enum class Localization {
     Cell,
 };
 
+/// Measurement functions of the finest step (the rows of C^{q-1}; Sec. 3.2 with weights).
+enum class Measurement {
+    Canonical,  ///< the paper's: the canonical refinement itself
+    /// Stiffness-weighted (weighted_refinement; no effect on the Dirac refinement, whose
+    /// measurements are values at single nodes): each fine node's share
+    /// of a coarse measurement is scaled by its local stiffness, so that a coarse node measures
+    /// mainly the stiff material around it. Coarser steps compose these measurements with the
+    /// canonical C^k, so the hierarchy stays nested. See "Stiffness-weighted measurements".
+    Stiffness,
+};
+
 /// "dirac", "linear" / "eliminate", "penalty", "diagonal_penalty", "constrain" / "fine",
-/// "coarse" / "node", "cell".
+/// "coarse" / "node", "cell" / "canonical", "stiffness".
 std::string refinement_name(Refinement r);
 std::string dirichlet_name(DirichletTreatment t);
 std::string radius_grid_name(RadiusGrid g);
 std::string localization_name(Localization l);
+std::string measurement_name(Measurement m);
 
 /// Options of the hierarchy (Algorithm 1).
 struct Options {
@@ -214,6 +226,7 @@ struct Options {
     /// Node- or cell-wise localization (finite radii only; Cell needs patch 1 and the Eliminate
     /// or Constrain treatment, whose fine operator is the sum of the element matrices).
     Localization localization = Localization::Node;
+    Measurement measurement = Measurement::Canonical;
     /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, an entry
     /// C̃_ij is dropped if |C̃_ij| < tau max_l |C̃_il| (relative to the largest coefficient of
     /// the same basis function). A^k = C̃^k A^{k+1} C̃^{k,T} is then the exact Galerkin matrix of

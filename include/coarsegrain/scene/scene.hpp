@@ -56,7 +56,7 @@ struct Scene {
 inline constexpr std::initializer_list<const char*> kCoarseKeys = {
     "mesh",       "normals",   "boundary",          "map",          "levels",
     "refinement", "radius",    "radius_grid",       "patch",        "truncation",
-    "invariance", "dirichlet", "spectrum_max_dofs", "cell_tensors", "localization"};
+    "invariance", "dirichlet", "spectrum_max_dofs", "cell_tensors", "localization", "measurement"};
 
 /// Reads and validates a scene file; relative file names inside are relative to its folder.
 /// @throws InvalidScene / MeshReadError / Error naming the file and key
