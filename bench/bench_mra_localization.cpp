@@ -1,13 +1,17 @@
 // Localization study of the material-adapted hierarchy (Chen et al. 2019, Sec. 3.5, Figs. 5, 6):
 // coarsest-level energy error and density against the localization radius rho (rings counted on
 // either grid), the truncation threshold, the material contrast and the invariance correction,
-// on a hung bimaterial square (inclusions, contrast 2000) and a layered composite (Fig. 9).
+// on a hung bimaterial square (inclusions, contrast 2000), a layered composite (Fig. 9: layers
+// along the hanging direction) and the same layers across it ("across": stiff slabs spanning
+// the width, each coarse cell of the finest step one layer at 16x16).
 //
 //   bench_mra_localization [cells=32] [levels=3] [tables=rtci]
 //     r: radius table (rho 1..8, fine/coarse rings, invariance on/off)
 //     t: truncation table (0, 1e-7, 1e-5, 1e-4, 1e-2) for global and localized solves
 //     c: contrast table (1e1..1e4), hung square only
 //     l: node- against cell-wise localization (rho 1..6 coarse rings, invariance on/off)
+//     m: canonical against stiffness-weighted measurements (global; cell-wise 2, 4, 6 coarse
+//        rings; node-wise without invariance correction 4, 6)
 //
 // Columns: err_u = ||u^1 - u||_A / ||u||_A, err_g = ||u^1 - u||_A / ||g||_2 (Fig. 6/9 metric),
 // dens_C = nonzero fraction of C̃ of the finest step, dens_A = of A^1, defect = Eq. 12
@@ -64,21 +68,26 @@ std::string radius_label(double rho, RadiusGrid g) {
 }
 
 void header() {
-    std::printf("%-10s %-6s %-4s %-4s %-7s %-8s %8s %9s %7s %7s %8s %7s\n", "problem", "rho", "loc",
-                "inv", "trunc", "contrast", "err_u", "err_g", "dens_C", "dens_A", "defect",
-                "build");
+    std::printf("%-10s %-6s %-4s %-4s %-9s %-7s %-8s %8s %9s %7s %7s %8s %7s\n", "problem", "rho",
+                "loc", "inv", "measure", "trunc", "contrast", "err_u", "err_g", "dens_C", "dens_A",
+                "defect", "build");
 }
 
 void print(const char* name, const Options& o, double contrast, const Row& r) {
-    std::printf("%-10s %-6s %-4s %-4d %-7.0e %-8.0e %8.4f %9.4g %7.3f %7.3f %8.2g %7.2f\n", name,
-                radius_label(o.radius[0], o.radius_grid).c_str(),
+    std::printf("%-10s %-6s %-4s %-4d %-9s %-7.0e %-8.0e %8.4f %9.4g %7.3f %7.3f %8.2g %7.2f\n",
+                name, radius_label(o.radius[0], o.radius_grid).c_str(),
                 cg::mra::localization_name(o.localization).c_str(), o.invariance ? 1 : 0,
-                o.truncation, contrast, r.err_u, r.err_g, r.dens_C, r.dens_A, r.defect, r.seconds);
+                cg::mra::measurement_name(o.measurement).c_str(), o.truncation, contrast, r.err_u, r.err_g, r.dens_C, r.dens_A, r.defect, r.seconds);
     std::fflush(stdout);
 }
 
 /// Vertical layers of thickness 1/8 (stiff first), as in the Fig. 9 tests.
 int layered(const Eigen::VectorXd& x) { return static_cast<int>(std::floor(8 * x[0])) % 2 == 0; }
+
+/// The same layers across the hanging direction.
+int layered_across(const Eigen::VectorXd& x) {
+    return static_cast<int>(std::floor(8 * x[1])) % 2 == 0;
+}
 
 struct Problem {
     const char* name;
@@ -100,7 +109,8 @@ int main(int argc, char** argv) {
     std::printf("%dx%d grid, %d levels, bilinear refinement, constrained Dirichlet\n", cells, cells,
                 levels);
     const std::vector<Problem> problems = {{"square", 1.0, 2000.0, cg::test::checker_pattern},
-                                           {"layered", 100.0, 5e4, layered}};
+                                           {"layered", 100.0, 5e4, layered},
+                                           {"across", 100.0, 5e4, layered_across}};
     Options base;
     base.levels = levels;
     base.refinement = cg::mra::Refinement::Linear;
@@ -141,6 +151,24 @@ int main(int argc, char** argv) {
                         o.localization = loc;
                         print(pr.name, o, pr.contrast, evaluate(p, o));
                     }
+        if (tables.find('m') != std::string::npos)
+            for (const auto m : {cg::mra::Measurement::Canonical, cg::mra::Measurement::Stiffness}) {
+                o = base;
+                o.measurement = m;
+                print(pr.name, o, pr.contrast, evaluate(p, o));
+                o.radius_grid = RadiusGrid::Coarse;
+                o.localization = cg::mra::Localization::Cell;
+                for (const double rho : {2.0, 4.0, 6.0}) {
+                    o.radius = {rho};
+                    print(pr.name, o, pr.contrast, evaluate(p, o));
+                }
+                o.localization = cg::mra::Localization::Node;
+                o.invariance = false;
+                for (const double rho : {4.0, 6.0}) {
+                    o.radius = {rho};
+                    print(pr.name, o, pr.contrast, evaluate(p, o));
+                }
+            }
     }
     if (tables.find('c') != std::string::npos)
         for (const double contrast : {1e1, 1e2, 1e3, 1e4}) {

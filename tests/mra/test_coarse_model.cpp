@@ -83,13 +83,14 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_TRUE(std::isinf(d.radius.at(0)));
     EXPECT_EQ(d.radius_grid, RadiusGrid::Fine);
     EXPECT_EQ(d.localization, Localization::Node);
+    EXPECT_EQ(d.measurement, Measurement::Canonical);
     EXPECT_EQ(d.patch, 1);
     EXPECT_EQ(d.truncation, 1e-7);
     EXPECT_TRUE(d.invariance);
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
     const Options o =
         parse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
-                        "radius_grid": "coarse", "localization": "cell", "patch": 2, "truncation": 1e-5,
+                        "radius_grid": "coarse", "localization": "cell", "measurement": "stiffness", "patch": 2, "truncation": 1e-5,
                         "invariance": false, "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
                       "t");
     EXPECT_EQ(o.levels, 4);
@@ -100,6 +101,7 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(o.radius[2], 3.5);
     EXPECT_EQ(o.radius_grid, RadiusGrid::Coarse);
     EXPECT_EQ(o.localization, Localization::Cell);
+    EXPECT_EQ(o.measurement, Measurement::Stiffness);
     EXPECT_EQ(o.patch, 2);
     EXPECT_EQ(o.truncation, 1e-5);
     EXPECT_FALSE(o.invariance);
@@ -121,6 +123,8 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
         {R"({"radius_grid": "medium"})", "coarse.radius_grid"},
         {R"({"localization": "patch"})",
          "coarse.localization: expected \"node\" or \"cell\", got \"patch\""},
+        {R"({"measurement": "mass"})",
+         "coarse.measurement: expected \"canonical\" or \"stiffness\", got \"mass\""},
         {R"({"patch": 0})", "coarse.patch"},
         {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
         {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},

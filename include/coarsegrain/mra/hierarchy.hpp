@@ -107,6 +107,38 @@
 /// steps). With the dense Moore-Penrose C^† (an experiment) the square gave 0.83 / 0.45 / 0.095 /
 /// 0.012 at 1c / 2c / 4c / 6c, at C̃ density 1.
 ///
+/// Why the accordion locks: there every coarse cell of a step is exactly one layer, so each
+/// coarse node sits on a stiff/soft interface and each stiff layer spans the cross-section. The
+/// same happens in 2D (the accordion as a 4x1 quad beam, one step, cell-wise, coarsest error
+/// against rho in fine rings): at 32x8 quads (one layer per coarse cell) rho = 2 / 4 / 8 / 16 /
+/// 24 give 0.61 / 0.51 / 0.46 / 0.42 / 0.57, and only regions spanning the whole beam (32) give
+/// the global 0.0005; at 64x16 (two coarse cells per layer) 0.21 / 0.072 / 0.014 / 0.0015 against
+/// the global 0.0014. Node-wise without the correction: 1.00 at every rho up to 8 in both.
+///
+/// ## Stiffness-weighted measurements (Options::measurement)
+/// Measurement::Stiffness weights the measurements of the finest step by the local stiffness
+/// (weighted_refinement), as the contrast-robust quasi-interpolation of Peterseim and Scheichl
+/// (2016). It makes the accordion case localize: the 2D accordion at 32x8, one step, cell-wise:
+/// rho = 4 / 8 fine rings 0.11 / 0.012, equal to its global 0.012 at 8 (canonical: 0.51 / 0.46,
+/// global 0.0005). The price is the coarse space: weighted measurements leave the soft layers'
+/// deformation to the wavelets, and the global construction is less accurate. The 3D accordion
+/// 32x8x8, one step, cell-wise: rho = 2 / 4 fine rings 0.41 / 0.145 (canonical 0.72 at 4, 0.74 at
+/// 8), global 0.0118 (canonical 0.0017); three levels, rho = 4: 0.51 (level 2: 0.145), as the
+/// coarser steps measure canonically again. On the localization study (bench_mra_localization
+/// 32 3 m, 32x32, 3 levels, no truncation, coarsest error, canonical / stiffness):
+///
+/// | problem                     | global          | cell 4c       | cell 6c       | node 6c, no corr. |
+/// |-----------------------------|-----------------|---------------|---------------|-------------------|
+/// | checker square              | 0.0116 / 0.0267 | 0.071 / 0.042 | 0.0117 / 0.027| 0.27 / 0.089      |
+/// | layered (along the hanging) | 0.035 / 0.107   | 0.65 / 0.62   | 0.41 / 0.26   | 0.036 / 0.29      |
+/// | layered across              | 0.0041 / 0.0086 | 0.083 / 0.21  | 0.064 / 0.12  | 0.94 / 0.98       |
+///
+/// So it is an option for layers as thick as the coarse cells of the finest step (measured 0.006
+/// against 0.60 in MraMeasurementLocalized), not a default. Weighting every step with the
+/// diagonal of A^{k+1} (an experiment) fixed the 2D accordion's middle step at 64x16 (level 2:
+/// 0.016 against 0.77) but not its coarsest step (0.80, global 0.021), and made A^1 of the 3D
+/// accordion singular at rho = 2.
+///
 /// ## Cost in 3D (bench/bench_mra)
 /// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
 /// clamped at x = 0, gravity), hex grids, 3 levels (coarsest = grid / 4), truncation 1e-7,
