@@ -32,14 +32,15 @@ constexpr Index kMinParallelColumns = 4096;
 /// kDenseLocalDensity of their entries nonzero, are factorized densely (blocked LLT), others by
 /// a sparse Cholesky with AMD ordering. Measured on the 64x16x16 accordion, rho = 2 fine rings,
 /// loaded machine: the systems of the fine step (~1000 wavelets) took 45 s sparse and 61 s
-/// dense, those of the coarse step (B^1 27% dense) 30 s sparse and under 1 s dense. CHOLMOD
-/// (solve::SpdSolver, supernodal) took 4x longer than the simplicial factorization on such
-/// systems (32x8x8 accordion: 16 s against 4 s) but pays from kSupernodalLocalMin unknowns
-/// (20x10x10 checker, rho = 5, regions of ~4000 wavelets: 18-20 s against 26 s, load ~8).
+/// dense, those of the coarse step (B^1 27% dense) 30 s sparse and under 1 s dense. From
+/// kSupernodalLocalMin unknowns the sparse factorization is CHOLMOD's supernodal one (AMD
+/// ordering, one BLAS thread per OpenMP thread), else Eigen's simplicial one: on the 24x12x12
+/// hex checker with rho = 5 fine rings (regions of ~1000-4000 wavelets, 2 threads) the localized
+/// solves took 15.7 s with CHOLMOD from 2500 unknowns and 8.4-10 s from 1000 (from 400: the same).
 constexpr Index kDenseLocalLimit = 400;
 constexpr Index kDenseLocalMax = 4000;
 constexpr double kDenseLocalDensity = 0.25;
-constexpr Index kSupernodalLocalMin = 2500;
+constexpr Index kSupernodalLocalMin = 1000;
 
 /// Solves b x = rhs for a local SPD matrix b (compressed, both triangles).
 Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
@@ -53,7 +54,9 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
         return llt.solve(rhs);
     }
     if (b.rows() >= kSupernodalLocalMin) {
-        solve::SpdSolver solver;
+        solve::SolverOptions options;
+        options.amd_only = true;
+        solve::SpdSolver solver(options);
         solver.compute(b);
         return solver.solve(rhs);
     }

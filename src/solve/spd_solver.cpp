@@ -79,6 +79,12 @@ class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
         m_analysisIsOk = true;
         m_factorizationIsOk = false;
     }
+    /// The next analyzePattern orders with AMD alone (CHOLMOD's default also tries METIS when
+    /// AMD's fill is large).
+    void use_amd_only() {
+        cholmod().nmethods = 1;
+        cholmod().method[0].ordering = CHOLMOD_AMD;
+    }
     bool has_factor() const { return m_cholmodFactor != nullptr; }
     /// Column at which the factorization stopped (n on success).
     Index minor() const { return static_cast<Index>(m_cholmodFactor->minor); }
@@ -220,39 +226,45 @@ std::uint64_t pattern_hash(const SparseMatrix& A) {
     return total;
 }
 
-// Checks that A's values are finite and A is symmetric: ||A - A^T||_F <= tol ||A||_F. Each
-// entry is compared with its transpose found by binary search (compressed columns hold sorted
-// row indices), so no transposed copy is made.
+// Checks that A's values are finite and A is symmetric: ||A - A^T||_F <= tol ||A||_F, without a
+// transposed copy, in one sequential pass: column j's entries below the diagonal, (i, j) with
+// i > j, are met in increasing j, so their partners (j, i) are met in increasing row order in
+// column i; a cursor per column walks over them. (A binary search per entry, parallel, took 16%
+// of the hierarchy's localized solves on ~1000-4000-unknown systems.)
 void check_values(const SparseMatrix& A, const std::string& where) {
     const Index n = static_cast<Index>(A.rows());
     const int* outer = A.outerIndexPtr();
     const int* inner = A.innerIndexPtr();
     const double* value = A.valuePtr();
+    std::vector<int> cursor(outer, outer + n);  // next upper entry (row < column) to match
     double norm2 = 0, asym2 = 0;
     Index bad = -1;
-#pragma omp parallel for reduction(+ : norm2, asym2) reduction(max : bad) schedule(static) \
-    if (A.nonZeros() > kParallelNonzeros)
-    for (Index j = 0; j < n; ++j) {
+    // An unmatched entry a contributes a^2 twice to ||A - A^T||^2, a matched pair 2 (a - b)^2.
+    const auto skip_unmatched = [&](Index i, Index below) {
+        int& c = cursor[static_cast<std::size_t>(i)];
+        for (; c < outer[i + 1] && inner[c] < below; ++c) asym2 += 2 * value[c] * value[c];
+    };
+    for (Index j = 0; j < n && bad < 0; ++j) {
         for (Index k = outer[j]; k < outer[j + 1]; ++k) {
             const Index i = inner[k];
             const double a = value[k];
             if (!std::isfinite(a)) {
-                bad = std::max(bad, j);
-                continue;
+                bad = j;
+                break;
             }
             norm2 += a * a;
-            if (i == j) continue;
-            const int* begin = inner + outer[i];
-            const int* end = inner + outer[i + 1];
-            const int* hit = std::lower_bound(begin, end, j);
-            if (hit != end && *hit == j) {
-                const double d = a - value[hit - inner];
-                asym2 += d * d;
+            if (i <= j) continue;
+            skip_unmatched(i, j);
+            int& c = cursor[static_cast<std::size_t>(i)];
+            if (c < outer[i + 1] && inner[c] == j) {
+                const double d = a - value[c++];
+                asym2 += 2 * d * d;
             } else {
-                asym2 += 2 * a * a;  // A(i,j) - A(j,i) and A(j,i) - A(i,j), both missing below
+                asym2 += 2 * a * a;
             }
         }
     }
+    for (Index i = 0; i < n && bad < 0; ++i) skip_unmatched(i, i);
     CG_VERIFY(bad < 0, "{}: the matrix has a non-finite value (NaN or inf) in column {}", where,
               bad);
     const double rel = norm2 > 0 ? std::sqrt(asym2 / norm2) : 0.0;
@@ -362,14 +374,17 @@ namespace {
 // runs should pass --threads 1. The OpenMP build of OpenBLAS (libopenblas0-openmp, which would
 // share coarsegrain's OpenMP pool) is not a cure: under the same load its 2-thread
 // factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads build. Other
-// BLAS libraries (no openblas_set_num_threads symbol) are left alone.
+// BLAS libraries (no openblas_set_num_threads symbol) are left alone. Inside an OpenMP parallel
+// region (the hierarchy's localized solves: one factorization per thread) BLAS gets one thread:
+// with OpenMP's count, the 2 threads' concurrent factorizations each woke both OpenBLAS threads
+// (24x12x12 hex checker, rho = 5, 2 threads: localized solves 25.6 s, 18.5 s with one).
 void match_blas_threads() {
     static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
     if (user_set) return;
     using SetThreads = void (*)(int);
     static const auto set =
         reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
-    if (set) set(omp_get_max_threads());
+    if (set) set(omp_in_parallel() ? 1 : omp_get_max_threads());
 }
 
 }  // namespace
@@ -409,6 +424,7 @@ void SpdSolver::analyze(const SparseMatrix& A) {
                 s.cholmod->analyze_permuted(A, perm);
                 ordering = std::move(name);
             } else {
+                if (s.options.amd_only) s.cholmod->use_amd_only();
                 s.cholmod->analyzePattern(A);  // no node blocks: CHOLMOD's default ordering
             }
             CG_VERIFY(s.cholmod->has_factor() && s.cholmod->status() >= 0,
@@ -436,6 +452,11 @@ void SpdSolver::factorize(const SparseMatrix& A) {
                               A.nonZeros() == s.nnz && A.isCompressed() &&
                               pattern_hash(A) == s.pattern;
     if (!same_pattern) analyze(A);
+    factorize_analyzed(A);
+}
+
+void SpdSolver::factorize_analyzed(const SparseMatrix& A) {
+    Impl& s = *m_impl;
     s.factorized = false;
     check_values(A, fmt::format("solver ({})", s.name()));
 
@@ -495,7 +516,7 @@ void SpdSolver::factorize(const SparseMatrix& A) {
 
 void SpdSolver::compute(const SparseMatrix& A) {
     analyze(A);
-    factorize(A);
+    factorize_analyzed(A);
 }
 
 Matrix SpdSolver::solve(const Matrix& b) const {

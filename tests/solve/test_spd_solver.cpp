@@ -351,7 +351,8 @@ TEST(SpdSolver, IndefiniteMatrixIsReported) {
 }
 
 // Bad input is an Error (not NotPositiveDefinite): non-square, non-symmetric (values or
-// pattern: only the lower triangle stored), NaN and infinite entries, an empty matrix.
+// pattern: only the lower or the upper triangle stored), NaN and infinite entries, an empty
+// matrix.
 TEST(SpdSolver, BadInputIsAnError) {
     const SparseMatrix A = shifted(random_graph_laplacian(50, 2, 14), 1.0);
     SparseMatrix rect = A.leftCols(40);
@@ -359,6 +360,8 @@ TEST(SpdSolver, BadInputIsAnError) {
     asym.coeffRef(3, 2) += 1e-3;
     SparseMatrix lower = A.triangularView<Eigen::Lower>();
     lower.makeCompressed();
+    SparseMatrix upper = A.triangularView<Eigen::Upper>();
+    upper.makeCompressed();
     SparseMatrix nan = A;
     nan.coeffRef(5, 5) = std::nan("");
     SparseMatrix inf = A;
@@ -366,7 +369,7 @@ TEST(SpdSolver, BadInputIsAnError) {
     inf.coeffRef(3, 4) = INFINITY;
     SparseMatrix empty(0, 0);
     for (Backend backend : kAll)
-        for (const SparseMatrix* bad : {&rect, &asym, &lower, &nan, &inf, &empty})
+        for (const SparseMatrix* bad : {&rect, &asym, &lower, &upper, &nan, &inf, &empty})
             expect_input_error(backend, *bad);
     // A tiny asymmetry (1e-14 relative, round-off of assembly) is accepted.
     SparseMatrix almost = A;
