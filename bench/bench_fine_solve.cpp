@@ -13,7 +13,8 @@ namespace cg = coarsegrain;
 namespace {
 
 cg::scene::Scene cantilever() {
-    nlohmann::json j = cg::scene::demo_scene(1.0);  // 64x16x16 hexes, two materials in layers
+    // Scale 2: 64x16x16 hexes (the demo itself is 32x8x8), two materials in layers.
+    nlohmann::json j = cg::scene::demo_scene(2.0);
     return cg::scene::parse_scene(j, "bench", "");
 }
 
