@@ -7,8 +7,10 @@ flavour=${1:-release}
 shift || true
 case "$flavour" in
   release) dir=build/release; flags=(-DCMAKE_BUILD_TYPE=Release) ;;
+  # clang: the instrumented build took 11.2 min (1239 s user) against g++'s 15.7 min (1677 s).
   asan)    dir=build/asan; flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCOARSEGRAIN_SANITIZE=ON
-                                  -DCOARSEGRAIN_BUILD_BENCH=OFF) ;;
+                                  -DCOARSEGRAIN_BUILD_BENCH=OFF -DCMAKE_CXX_COMPILER=clang++
+                                  -DCMAKE_C_COMPILER=clang) ;;
   *) echo "usage: scripts/build.sh [release|asan] [targets...]" >&2; exit 2 ;;
 esac
 # ccache (installed by setup.sh) makes rebuilds in fresh clones and git worktrees cheap;

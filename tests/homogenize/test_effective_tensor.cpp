@@ -139,7 +139,7 @@ TEST_P(EffectiveTensorDim, HomogeneousSolutionEqualsTheNaiveOne) {
         {{"mesh", grid(lo, hi, dim == 3 ? std::vector<int>{9, 3, 3} : std::vector<int>{18, 6},
                        dim == 3 ? "hex" : "quad")},
          {"materials", {{"0", iso(1e3, 0.3, 1.5)}}},
-         {"dirichlet", {box(clamp_lo, clamp_hi)}},
+         {"dirichlet", json::array({box(clamp_lo, clamp_hi)})},
          {"loads", {{"gravity", g}}},
          {"coarse",
           {{"mesh", grid(lo, hi, dim == 3 ? std::vector<int>{4, 2, 2} : std::vector<int>{5, 2},
@@ -165,8 +165,8 @@ TEST(EffectiveTensor, SpringsInSeriesGiveTheSeriesStiffness) {
         {"mesh", grid({0, 0, 0}, {2, 1, 1}, {16, 6, 6}, "hex")},
         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 1.0}, {"ids", {1, 2}}}}}},
         {"materials", {{"1", iso(E1, 0.0)}, {"2", iso(E2, 0.0)}}},
-        {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
-        {"loads", {{"traction", {box({2 - 1e-9, -1, -1}, {2 + 1e-9, 2, 2}, {1, 0, 0})}}}},
+        {"dirichlet", json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
+        {"loads", {{"traction", json::array({box({2 - 1e-9, -1, -1}, {2 + 1e-9, 2, 2}, {1, 0, 0})})}}},
         {"coarse", {{"mesh", grid({0, 0, 0}, {2, 1, 1}, {1, 3, 3}, "tet")}}}};
     const test::Setup s = test::setup(j);
     const double k_series = 1.0 / (1.0 / E1 + 1.0 / E2);  // k_i = E_i A / L_i with A = L_i = 1
@@ -234,7 +234,7 @@ TEST(EffectiveTensor, CavityWeighsNothing) {
 // The coarse model's file (coarse_model.vtu) carries everything a simulation needs: read back as
 // a scene mesh it gives the same stiffness, load and solution without the fine mesh.
 TEST(EffectiveTensor, CoarseModelFileSimulatesWithoutTheFineMesh) {
-    const json clamp = {box({-1e-9, -1, -1}, {1e-9, 2, 2})};
+    const json clamp = json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})});
     json j = spheres_scene(3);
     j["coarse"]["mesh"] = grid({0, 0, 0}, {1, 1, 1}, {2, 2, 2}, "tet");
     j["dirichlet"] = clamp;
@@ -316,7 +316,7 @@ TEST(EffectiveTensor, MixedBoundaryFallsBackWhereTheClampPinsAnEdge) {
         {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {16, 4, 4}, "hex")},
          {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.5}, {"ids", {1, 2}}}}}},
          {"materials", {{"1", iso(1e3, 0.3)}, {"2", iso(1.0, 0.45)}}},
-         {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
+         {"dirichlet", json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
          {"loads", {{"gravity", {0, 0, -1}}}},
          {"coarse",
           {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {4, 2, 2}, "tet")},
@@ -414,7 +414,7 @@ TEST(EffectiveTensor, BadInputIsNamed) {
     // Boxes that select nothing on the coarse mesh.
     json j = fine_part;
     j["coarse"] = {{"mesh", cover}};
-    j["dirichlet"] = {box({0.25 - 1e-9, -1, -1}, {0.25 + 1e-9, 2, 2})};
+    j["dirichlet"] = json::array({box({0.25 - 1e-9, -1, -1}, {0.25 + 1e-9, 2, 2})});
     const test::Setup sd = test::setup(j);
     test::expect_error([&] { homogenize::build_coarse_model(sd.scene, sd.fine, "voigt"); },
                        "dirichlet[0].box selects no node of the coarse mesh");

@@ -45,7 +45,7 @@ TEST(EffectiveTensorSlow, AccordionBeam) {
         {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {32, 8, 8}, "hex")},
          {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.25}, {"ids", {1, 2}}}}}},
          {"materials", {{"1", iso(1e5, 0.3)}, {"2", iso(1e2, 0.45)}}},
-         {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
+         {"dirichlet", json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
          {"loads", {{"gravity", {0, 0, -9.81}}}},
          {"coarse", {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {8, 3, 3}, "tet")}}}});
     auto r = compare_methods(s, "accordion beam (contrast 1000, 8x3x3 coarse cells)");
@@ -64,7 +64,7 @@ TEST(EffectiveTensorSlow, CrackedBarBendsOnACoarseMesh) {
     scene::Scene sc =
         scene::parse_scene({{"mesh", grid({0, 0}, {4, 1}, {128, 32}, "quad")},
                             {"materials", {{"1", iso(1e4, 0.3)}, {"2", iso(1.0, 0.3)}}},
-                            {"dirichlet", {box({-1e-9, -1}, {1e-9, 2})}},
+                            {"dirichlet", json::array({box({-1e-9, -1}, {1e-9, 2})})},
                             {"loads", {{"gravity", {0, -9.81}}}},
                             {"coarse", {{"mesh", grid({0, 0}, {4, 1}, {3, 1}, "tri")}}}},
                            "crack.json", "");
@@ -215,7 +215,7 @@ test::Setup layered_cube(double thickness, int n) {
                         {"material_field",
                          {{"layers", {{"axis", "x"}, {"thickness", thickness}, {"ids", {1, 2}}}}}},
                         {"materials", {{"1", iso(1e5, 0.3)}, {"2", iso(1e2, 0.45)}}},
-                        {"dirichlet", {box({-1e-9, -1, -1}, {1e-9, 2, 2})}},
+                        {"dirichlet", json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
                         {"loads", {{"gravity", {0, 0, -9.81}}}},
                         {"coarse", {{"mesh", grid({0, 0, 0}, {1, 1, 1}, {n, n, n}, "tet")}}}});
 }
