@@ -103,7 +103,7 @@ TEST(MraMeasurementLocalized, StiffnessWeightsLocalizeALayeredColumn) {
     // gravity and a pull, 8x32 quads, one step to 4x16: each coarse cell is one layer, so every
     // coarse node sits on a stiff/soft interface and each stiff layer spans the width. With the
     // canonical measurements the cell-wise localized solves lock even when the regions (8 fine
-    // rings) span the width and a quarter of the height; the stiffness-weighted measurements
+    // rings) span the width and half the height; the stiffness-weighted measurements
     // give the global construction's error. Measured coarsest energy errors: canonical global
     // 0.00102, cell-wise 0.603; stiffness global 0.00641, cell-wise 0.00641. The weighted
     // global space is 6x less accurate than the canonical one here: a coarse node measures the
