@@ -113,7 +113,8 @@
 /// against rho in fine rings): at 32x8 quads (one layer per coarse cell) rho = 2 / 4 / 8 / 16 /
 /// 24 give 0.61 / 0.51 / 0.46 / 0.42 / 0.57, and only regions spanning the whole beam (32) give
 /// the global 0.0005; at 64x16 (two coarse cells per layer) 0.21 / 0.072 / 0.014 / 0.0015 against
-/// the global 0.0014. Node-wise without the correction: 1.00 at every rho up to 8 in both.
+/// the global 0.0014. Node-wise without the correction at 64x16: 1.00 / 1.00 / 0.99 / 0.034 at
+/// rho = 2 / 4 / 8 / 16.
 ///
 /// ## Stiffness-weighted measurements (Options::measurement)
 /// Measurement::Stiffness weights the measurements of the finest step by the local stiffness
