@@ -77,7 +77,8 @@ void print(const char* name, const Options& o, double contrast, const Row& r) {
     std::printf("%-10s %-6s %-4s %-4d %-9s %-7.0e %-8.0e %8.4f %9.4g %7.3f %7.3f %8.2g %7.2f\n",
                 name, radius_label(o.radius[0], o.radius_grid).c_str(),
                 cg::mra::localization_name(o.localization).c_str(), o.invariance ? 1 : 0,
-                cg::mra::measurement_name(o.measurement).c_str(), o.truncation, contrast, r.err_u, r.err_g, r.dens_C, r.dens_A, r.defect, r.seconds);
+                cg::mra::measurement_name(o.measurement).c_str(), o.truncation, contrast, r.err_u,
+                r.err_g, r.dens_C, r.dens_A, r.defect, r.seconds);
     std::fflush(stdout);
 }
 
@@ -152,7 +153,8 @@ int main(int argc, char** argv) {
                         print(pr.name, o, pr.contrast, evaluate(p, o));
                     }
         if (tables.find('m') != std::string::npos)
-            for (const auto m : {cg::mra::Measurement::Canonical, cg::mra::Measurement::Stiffness}) {
+            for (const auto m :
+                 {cg::mra::Measurement::Canonical, cg::mra::Measurement::Stiffness}) {
                 o = base;
                 o.measurement = m;
                 print(pr.name, o, pr.contrast, evaluate(p, o));

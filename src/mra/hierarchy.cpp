@@ -190,7 +190,6 @@ SparseMatrix symmetrized(const SparseMatrix& M) {
     return S;
 }
 
-/// Φ^q: the selection of the present fine DOFs, #fine_dofs by fine grid DOFs.
 /// Largest Chebyshev distance, in cells of level k, between the node of a row of Phi (Φ^k on the
 /// present fine DOFs, rows h.level(k).dofs or h.fine_dofs for k = q) and the finest nodes of its
 /// entries, rounded up.
@@ -213,6 +212,7 @@ int basis_reach(const Hierarchy& h, const SparseMatrix& Phi, int k) {
     return reach;
 }
 
+/// Φ^q: the selection of the present fine DOFs, #fine_dofs by fine grid DOFs.
 SparseMatrix fine_selection(const Hierarchy& h) {
     SparseMatrix Phi(h.fine_dofs.size(), h.fine_grid_dofs());
     std::vector<Triplet> t;
@@ -399,9 +399,9 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             if (k == q - 1 && options.measurement == Measurement::Stiffness)
                 C_node = weighted_refinement(std::move(C_node), coincident,
                                              stiffness_weights(K, mesh.elements, dim));
-            RefinementOperators ops = refinement_operators(
-                C_node, coincident, dim, dofs_next,
-                options.dirichlet != DirichletTreatment::Eliminate);
+            RefinementOperators ops =
+                refinement_operators(C_node, coincident, dim, dofs_next,
+                                     options.dirichlet != DirichletTreatment::Eliminate);
             L.dofs = std::move(ops.coarse_dofs);
             L.dropped_dofs = std::move(ops.dropped_dofs);
             L.C = std::move(ops.C);
@@ -462,7 +462,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         const Index coarse_nodes = grid_nodes(L.cells, dim);
         L.dirichlet_nodes.assign(static_cast<std::size_t>(coarse_nodes), 0);
         {
-            const Eigen::Vector3i nq(cells[0] + 1, cells[1] + 1, dim == 3 ? cells[2] + 1 : 1);
+            const Eigen::Vector3i nq = node_counts(cells, dim);
             const int s = 1 << (q - k);
             for (Index i = 0; i < coarse_nodes; ++i) {
                 const Eigen::Vector3i x = s * node_coordinates(i, L.cells, dim);
@@ -497,8 +497,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             std::vector<int> kept_count(static_cast<std::size_t>(coarse_nodes), 0);
             for (Index r = 0; r < L.dofs.size(); ++r)
                 ++kept_count[static_cast<std::size_t>(L.dofs[r] / dim)];
-            const Eigen::Vector3i nf(fine_cells[0] + 1, fine_cells[1] + 1,
-                                     dim == 3 ? fine_cells[2] + 1 : 1);
+            const Eigen::Vector3i nf = node_counts(fine_cells, dim);
             // Cell localization: node i gets rows from the cells T that (C^† Φ^{k+1})[i, :]
             // touches, within phi_reach (+1 for the linear C^†) of node i, and a cell's region
             // reaches `rings` beyond the cell, 2 rings beyond its nodes.

@@ -11,11 +11,11 @@ namespace {
 
 using Triplet = Eigen::Triplet<double, Index>;
 
+}  // namespace
+
 Eigen::Vector3i node_counts(const Eigen::Vector3i& cells, int dim) {
     return {cells[0] + 1, cells[1] + 1, dim == 3 ? cells[2] + 1 : 1};
 }
-
-}  // namespace
 
 Index grid_nodes(const Eigen::Vector3i& cells, int dim) {
     const Eigen::Vector3i n = node_counts(cells, dim);
@@ -84,11 +84,10 @@ Vector stiffness_weights(const SparseMatrix& K, const IndexMatrix& elements, int
     Vector count = Vector::Zero(nodes);
     for (Index e = 0; e < elements.rows(); ++e)
         for (Index a = 0; a < elements.cols(); ++a) count[elements(e, a)] += 1;
+    const Vector diagonal = K.diagonal();
     Vector w(nodes);
     for (Index j = 0; j < nodes; ++j) {
-        double trace = 0;
-        for (int d = 0; d < dim; ++d) trace += K.coeff(dim * j + d, dim * j + d);
-        w[j] = trace / (dim * count[j]);
+        w[j] = diagonal.segment(dim * j, dim).sum() / (dim * count[j]);
         CG_VERIFY(std::isfinite(w[j]) && w[j] > 0,
                   "mra: node {} has no positive stiffness weight ({}; an unused node?)", j, w[j]);
     }
@@ -97,8 +96,7 @@ Vector stiffness_weights(const SparseMatrix& K, const IndexMatrix& elements, int
 
 SparseMatrix weighted_refinement(SparseMatrix C_node, const std::vector<Index>& coincident,
                                  const Vector& w) {
-    CG_VERIFY(C_node.cols() == w.size() &&
-                  C_node.rows() == static_cast<Index>(coincident.size()),
+    CG_VERIFY(C_node.cols() == w.size() && C_node.rows() == static_cast<Index>(coincident.size()),
               "mra: weighted refinement of a {}x{} refinement with {} weights and {} coincident "
               "nodes",
               C_node.rows(), C_node.cols(), w.size(), coincident.size());

@@ -111,10 +111,8 @@ struct Region {
 std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeometry& g, int rings,
                                   int patch) {
     const int dim = g.dim;
-    const Eigen::Vector3i nf(g.fine_cells[0] + 1, g.fine_cells[1] + 1,
-                             dim == 3 ? g.fine_cells[2] + 1 : 1);
-    const Eigen::Vector3i nc(g.coarse_cells[0] + 1, g.coarse_cells[1] + 1,
-                             dim == 3 ? g.coarse_cells[2] + 1 : 1);
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
+    const Eigen::Vector3i nc = node_counts(g.coarse_cells, dim);
     std::map<std::array<int, 6>, std::size_t> index;
     std::vector<Region> regions;
     for (std::size_t n = 0; n < nodes.size(); ++n) {
@@ -129,11 +127,6 @@ std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeo
         regions[it->second].members.push_back(static_cast<Index>(n));
     }
     return regions;
-}
-
-/// Nodes per axis of a grid with `cells` (1 along z in 2D).
-Eigen::Vector3i node_counts(const Eigen::Vector3i& cells, int dim) {
-    return {cells[0] + 1, cells[1] + 1, dim == 3 ? cells[2] + 1 : 1};
 }
 
 /// Per level-(k+1) grid DOF, its index among the present DOFs g.fine_dofs (-1: absent).

@@ -22,6 +22,9 @@ enum class Refinement {
     Linear,  ///< the refinement of (bi/tri)linear hat functions: 1D weights 1/2, 1, 1/2
 };
 
+/// Nodes per axis of a grid with `cells` cells per axis (1 along z in 2D).
+Eigen::Vector3i node_counts(const Eigen::Vector3i& cells, int dim);
+
 /// Nodes of a grid with `cells` cells per axis (cells[2] ignored in 2D).
 Index grid_nodes(const Eigen::Vector3i& cells, int dim);
 
