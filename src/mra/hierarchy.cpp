@@ -6,12 +6,14 @@
 
 #include "coarsegrain/common/error.hpp"
 #include "detail.hpp"
+#include "products.hpp"
 
 namespace coarsegrain::mra {
 
 namespace {
 
 using Triplet = Eigen::Triplet<double, Index>;
+using detail::product;
 
 /// Rows/columns `keep` of a square matrix (keep sorted).
 SparseMatrix principal_submatrix(const SparseMatrix& K, const IndexVector& keep) {
@@ -29,166 +31,9 @@ SparseMatrix principal_submatrix(const SparseMatrix& K, const IndexVector& keep)
     return out;
 }
 
-/// Eigen's sparse-sparse product costs about this many times more per multiply-add than a dense
-/// (blocked, vectorized) one: measured on the 32x32 grid after global solves, A^4 = C̃ A C̃^T
-/// took 1.4 s sparse against 0.04 s dense. Products whose dense form needs more than 6e7
-/// entries (480 MB) per operand are always sparse.
-constexpr double kSparseFlopPenalty = 30;
-constexpr double kDenseProductMaxEntries = 6e7;
-
-double entries(const SparseMatrix& M) {
-    return static_cast<double>(M.rows()) * static_cast<double>(M.cols());
-}
-
-/// Multiply-adds of the sparse product X Y: sum over the entries Y_kj of nnz(X(:, k)).
-double sparse_product_flops(const SparseMatrix& X, const SparseMatrix& Y) {
-    double flops = 0;
-    for (Index j = 0; j < Y.outerSize(); ++j)
-        for (SparseMatrix::InnerIterator it(Y, j); it; ++it)
-            flops += static_cast<double>(X.col(it.row()).nonZeros());
-    return flops;
-}
-
-/// Columns per OpenMP chunk of sparse_product, and the fewest columns worth a second thread.
-constexpr Index kProductChunk = 16;
-constexpr Index kMinParallelProductColumns = 256;
-
-/// X Y by Gustavson's column-by-column algorithm with a dense accumulator per thread, in parallel
-/// over the columns of Y (OpenMP). With `lower`, only the entries on or below the diagonal.
-/// Exact zeros (cancellations) are not stored; the row indices come out sorted.
-SparseMatrix sparse_product(const SparseMatrix& X, const SparseMatrix& Y, bool lower) {
-    if (!X.isCompressed()) {
-        SparseMatrix compressed = X;
-        compressed.makeCompressed();
-        return sparse_product(compressed, Y, lower);
-    }
-    const Index m = static_cast<Index>(X.rows()), n = static_cast<Index>(Y.cols());
-    std::vector<std::vector<Index>> rows(static_cast<std::size_t>(n));
-    std::vector<std::vector<double>> values(static_cast<std::size_t>(n));
-#pragma omp parallel if (n >= kMinParallelProductColumns)
-    {
-        std::vector<double> acc(static_cast<std::size_t>(m), 0.0);
-        std::vector<char> used(static_cast<std::size_t>(m), 0);
-        std::vector<Index> pattern;
-#pragma omp for schedule(dynamic, kProductChunk)
-        for (Index j = 0; j < n; ++j) {
-            pattern.clear();
-            for (SparseMatrix::InnerIterator y(Y, j); y; ++y) {
-                const Index k = static_cast<Index>(y.row());
-                const Index* begin = X.innerIndexPtr() + X.outerIndexPtr()[k];
-                const Index* end = X.innerIndexPtr() + X.outerIndexPtr()[k + 1];
-                const Index* first = lower ? std::lower_bound(begin, end, j) : begin;
-                const double* v = X.valuePtr() + (first - X.innerIndexPtr());
-                for (const Index* i = first; i != end; ++i, ++v) {
-                    const auto r = static_cast<std::size_t>(*i);
-                    if (!used[r]) {
-                        used[r] = 1;
-                        pattern.push_back(*i);
-                    }
-                    acc[r] += *v * y.value();
-                }
-            }
-            std::sort(pattern.begin(), pattern.end());
-            auto& col_rows = rows[static_cast<std::size_t>(j)];
-            auto& col_values = values[static_cast<std::size_t>(j)];
-            col_rows.reserve(pattern.size());
-            col_values.reserve(pattern.size());
-            for (const Index i : pattern) {
-                const auto r = static_cast<std::size_t>(i);
-                if (acc[r] != 0.0) {
-                    col_rows.push_back(i);
-                    col_values.push_back(acc[r]);
-                }
-                acc[r] = 0.0;
-                used[r] = 0;
-            }
-        }
-    }
-    std::size_t nnz = 0;
-    for (const auto& r : rows) nnz += r.size();
-    SparseMatrix P(m, n);
-    P.resizeNonZeros(static_cast<Index>(nnz));
-    Index* outer = P.outerIndexPtr();
-    outer[0] = 0;
-    for (Index j = 0; j < n; ++j) {
-        auto& r = rows[static_cast<std::size_t>(j)];
-        auto& v = values[static_cast<std::size_t>(j)];
-        outer[j + 1] = outer[j] + static_cast<Index>(r.size());
-        std::copy(r.begin(), r.end(), P.innerIndexPtr() + outer[j]);
-        std::copy(v.begin(), v.end(), P.valuePtr() + outer[j]);
-        std::vector<Index>().swap(r);
-        std::vector<double>().swap(v);
-    }
-    return P;
-}
-
-/// Whether X Y is cheaper through dense arithmetic, and fits.
-bool dense_product_pays(const SparseMatrix& X, const SparseMatrix& Y) {
-    const bool fits =
-        entries(X) <= kDenseProductMaxEntries && entries(Y) <= kDenseProductMaxEntries &&
-        static_cast<double>(X.rows()) * static_cast<double>(Y.cols()) <= kDenseProductMaxEntries;
-    return fits && kSparseFlopPenalty * sparse_product_flops(X, Y) >
-                       entries(X) * static_cast<double>(Y.cols());
-}
-
-/// X Y dense (exact zeros are not stored).
-SparseMatrix dense_product(const SparseMatrix& X, const SparseMatrix& Y) {
-    SparseMatrix out = Matrix(Matrix(X) * Matrix(Y)).sparseView(0.0, 0.0);
-    out.makeCompressed();
-    return out;
-}
-
-/// X Y by the cheaper of the sparse product and the dense one. Global solves make C̃ and A
-/// dense, localized solves keep them sparse: on a 24x8x8 hex grid with rho = 3 fine rings (C̃
-/// 10% dense), the dense A^1 = C̃ A C̃^T took 12 s and the sparse one 1.6 s, on a loaded
-/// machine.
-SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y) {
-    return dense_product_pays(X, Y) ? dense_product(X, Y) : sparse_product(X, Y, false);
-}
-
-/// Rows per block of dense_lower_product.
-constexpr Index kDenseBlock = 128;
-
-/// The symmetric matrix whose lower triangle is that of M Y (M Y symmetric up to round-off),
-/// dense: block columns of the lower triangle in parallel (OpenMP), the upper one mirrored. Half
-/// the multiply-adds of M Y, on every thread (Eigen's own products run on one thread here).
-SparseMatrix dense_lower_product(const SparseMatrix& M, const SparseMatrix& Y) {
-    const Matrix Md(M), Yd(Y);
-    const Index m = Md.rows();
-    Matrix P(m, m);
-#pragma omp parallel for schedule(dynamic, 1)
-    for (Index b = 0; b < m; b += kDenseBlock) {
-        const Index nb = std::min(kDenseBlock, m - b);
-        P.block(b, b, m - b, nb).noalias() = Md.bottomRows(m - b) * Yd.middleCols(b, nb);
-    }
-    for (Index j = 1; j < m; ++j)
-        for (Index i = 0; i < j; ++i) P(i, j) = P(j, i);
-    SparseMatrix out = P.sparseView(0.0, 0.0);
-    out.makeCompressed();
-    return out;
-}
-
-/// M X M^T for symmetric X, exactly symmetric. The sparse path computes only the lower
-/// triangle of M (X M^T) and mirrors it.
-SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X) {
-    const SparseMatrix Mt = M.transpose();
-    const SparseMatrix XMt = product(X, Mt);
-    if (dense_product_pays(M, XMt)) return dense_lower_product(M, XMt);
-    const SparseMatrix L = sparse_product(M, XMt, true);
-    SparseMatrix S = L + SparseMatrix(L.transpose());
-    S.makeCompressed();
-    for (Index j = 0; j < S.outerSize(); ++j)
-        for (SparseMatrix::InnerIterator it(S, j); it; ++it)
-            if (it.row() == j) it.valueRef() *= 0.5;
-    return S;
-}
-
-/// (M + M^T) / 2, compressed.
-SparseMatrix symmetrized(const SparseMatrix& M) {
-    SparseMatrix S = 0.5 * (M + SparseMatrix(M.transpose()));
-    S.makeCompressed();
-    return S;
-}
+/// Side, in nodes, of the blocks of coarse nodes the Galerkin product A^k = C̃ A^{k+1} C̃^T takes
+/// together (index: dim): 2x2x2 nodes (24 DOFs) in 3D, 3x3 (18 DOFs) in 2D.
+constexpr int kGroupSide[4] = {0, 0, 3, 2};
 
 /// Largest Chebyshev distance, in cells of level k, between the node of a row of Phi (Φ^k on the
 /// present fine DOFs, rows h.level(k).dofs or h.fine_dofs for k = q) and the finest nodes of its
@@ -429,7 +274,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         {
             const Phase phase(tag + "B", &h.timings);
             const SparseMatrix AWt = product(A, SparseMatrix(L.W.transpose()));
-            L.B = symmetrized(product(L.W, AWt));
+            L.B = detail::symmetrized(product(L.W, AWt));
             if (!by_cell || std::isinf(L.radius))
                 R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
         }
@@ -528,7 +373,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
         {
             const Phase phase(tag + "A", &h.timings);
-            L.A = congruence(L.C_adapted, A);
+            L.A = detail::congruence(L.C_adapted, A,
+                                     detail::node_blocks(L.dofs, L.cells, dim, kGroupSide[dim]));
         }
         if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);

@@ -42,8 +42,11 @@ constexpr Index kDenseLocalMax = 4000;
 constexpr double kDenseLocalDensity = 0.25;
 constexpr Index kSupernodalLocalMin = 1000;
 
-/// Solves b x = rhs for a local SPD matrix b (compressed, both triangles).
-Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
+/// Solves b x = rhs for a local SPD matrix b (compressed, both triangles). `solver` is the
+/// calling thread's: when b has the pattern of its last CHOLMOD factorization (regions of the
+/// same shape, away from the grid's boundary and the Dirichlet nodes), the symbolic analysis
+/// is reused.
+Matrix local_solve(const SparseMatrix& b, const Matrix& rhs, solve::SpdSolver& solver) {
     const double n = static_cast<double>(b.rows());
     if (b.rows() <= kDenseLocalLimit ||
         (b.rows() <= kDenseLocalMax &&
@@ -54,10 +57,7 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
         return llt.solve(rhs);
     }
     if (b.rows() >= kSupernodalLocalMin) {
-        solve::SolverOptions options;
-        options.amd_only = true;
-        solve::SpdSolver solver(options);
-        solver.compute(b);
+        solver.factorize(b);
         return solver.solve(rhs);
     }
     Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>> llt(b);
@@ -65,6 +65,20 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs) {
               "mra: a local wavelet stiffness (n = {}) is not positive definite", b.rows());
     return llt.solve(rhs);
 }
+
+/// Per-thread scratch of the localized solves: `local`, the wavelet -> region row map (-1 for
+/// wavelets outside the region; whoever fills it restores it), the region's wavelets S, and the
+/// sparse solver, kept across regions for its symbolic analysis.
+struct RegionScratch {
+    explicit RegionScratch(Index wavelets) : local(static_cast<std::size_t>(wavelets), -1) {
+        solve::SolverOptions options;
+        options.amd_only = true;
+        solver = solve::SpdSolver(options);
+    }
+    std::vector<Index> local;
+    std::vector<Index> S;
+    solve::SpdSolver solver;
+};
 
 }  // namespace
 
@@ -103,11 +117,13 @@ namespace {
 /// the node list of localized_z) whose rows of Z are solved on it.
 struct Region {
     Eigen::Vector3i lo, hi;
+    Eigen::Vector3i anchor;  ///< level-(k+1) grid coordinates of the patch's first node
     std::vector<Index> members;
 };
 
 /// Regions of the localized solves: per patch of coarse nodes, the fine nodes within `rings` of
-/// the patch's nodes, clipped to the grid; patches whose boxes coincide are merged.
+/// the patch's nodes, clipped to the grid; patches whose boxes coincide are merged. Sorted by
+/// shape.
 std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeometry& g, int rings,
                                   int patch) {
     const int dim = g.dim;
@@ -123,9 +139,17 @@ std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeo
         const Eigen::Vector3i hi = (2 * last.array() + rings).min(nf.array() - 1);
         const std::array<int, 6> key{lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
         const auto [it, added] = index.emplace(key, regions.size());
-        if (added) regions.push_back({lo, hi, {}});
+        if (added) regions.push_back({lo, hi, 2 * first, {}});
         regions[it->second].members.push_back(static_cast<Index>(n));
     }
+    // Regions of the same shape, clipped alike, have the same local pattern (but near a
+    // Dirichlet boundary): consecutive, they reuse the solver's symbolic analysis.
+    const auto shape = [](const Region& r) {
+        const Eigen::Vector3i a = r.lo - r.anchor, b = r.hi - r.anchor;
+        return std::array<int, 6>{a[0], a[1], a[2], b[0], b[1], b[2]};
+    };
+    std::stable_sort(regions.begin(), regions.end(),
+                     [&](const Region& a, const Region& b) { return shape(a) < shape(b); });
     return regions;
 }
 
@@ -165,19 +189,26 @@ void box_wavelets(const SparseMatrix& W, const std::vector<Index>& fine_local,
         local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
 }
 
-/// B[S, S] (both triangles), local[w] the position of wavelet w in S or -1.
+/// B[S, S] (both triangles), local[w] the position of wavelet w in S or -1. S is sorted, so
+/// local is increasing on S and B's sorted columns give sorted local columns.
 SparseMatrix principal_block(const SparseMatrix& B, const std::vector<Index>& S,
                              const std::vector<Index>& local) {
     const Index ns = static_cast<Index>(S.size());
-    std::vector<Triplet> bt;
-    for (Index s = 0; s < ns; ++s)
+    std::vector<Index> outer(static_cast<std::size_t>(ns) + 1, 0);
+    std::vector<Index> inner;
+    std::vector<double> values;
+    for (Index s = 0; s < ns; ++s) {
         for (SparseMatrix::InnerIterator it(B, S[static_cast<std::size_t>(s)]); it; ++it) {
             const Index r = local[static_cast<std::size_t>(it.row())];
-            if (r >= 0) bt.emplace_back(r, s, it.value());
+            if (r >= 0) {
+                inner.push_back(r);
+                values.push_back(it.value());
+            }
         }
-    SparseMatrix b(ns, ns);
-    b.setFromTriplets(bt.begin(), bt.end());
-    return b;
+        outer[static_cast<std::size_t>(s) + 1] = static_cast<Index>(inner.size());
+    }
+    return Eigen::Map<const SparseMatrix>(ns, ns, static_cast<Index>(inner.size()), outer.data(),
+                                          inner.data(), values.data());
 }
 
 /// The columns `cols` of M as a dense block over the rows where they have a nonzero (`rows`,
@@ -200,8 +231,9 @@ Matrix column_block(const SparseMatrix& M, const IndexVector& cols, IndexVector&
 
 /// Solves b x = rhs and appends -x as entries (rows[q], S[s]) of Z.
 void append_solution(const SparseMatrix& b, const Matrix& rhs, const std::vector<Index>& rows,
-                     const std::vector<Index>& S, std::vector<Triplet>& part) {
-    const Matrix x = local_solve(b, rhs);
+                     const std::vector<Index>& S, solve::SpdSolver& solver,
+                     std::vector<Triplet>& part) {
+    const Matrix x = local_solve(b, rhs, solver);
     part.reserve(part.size() + static_cast<std::size_t>(x.size()));
     for (Index q = 0; q < x.cols(); ++q)
         for (Index s = 0; s < x.rows(); ++s)
@@ -225,22 +257,20 @@ SparseMatrix from_parts(std::vector<std::vector<Triplet>>& parts, Index rows, In
     return Z;
 }
 
-/// Runs solve(n, local, S) for every region n in [0, count) on all OpenMP threads (dynamic
-/// schedule: regions differ in size), each thread with its own scratch: `local`, nw entries of -1
-/// that solve() must restore (the wavelet -> region row map), and S. The first exception thrown
-/// is rethrown after the loop.
+/// Runs solve(n, scratch) for every region n in [0, count) on all OpenMP threads (dynamic
+/// schedule: regions differ in size), each thread with its own RegionScratch for nw wavelets.
+/// The first exception thrown is rethrown after the loop.
 template <class F>
 void for_each_region(Index count, Index nw, F&& solve) {
     std::exception_ptr error;
     std::mutex mutex;
 #pragma omp parallel if (count >= kMinParallelNodes)
     {
-        std::vector<Index> local(static_cast<std::size_t>(nw), -1);
-        std::vector<Index> S;
+        RegionScratch scratch(nw);
 #pragma omp for schedule(dynamic, 1)
         for (Index n = 0; n < count; ++n) {
             try {
-                solve(n, local, S);
+                solve(n, scratch);
             } catch (...) {
                 const std::lock_guard<std::mutex> lock(mutex);
                 if (!error) error = std::current_exception();
@@ -273,30 +303,30 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
     const Index num_regions = static_cast<Index>(regions.size());
 
     std::vector<std::vector<Triplet>> parts(static_cast<std::size_t>(num_regions));
-    for_each_region(
-        num_regions, nw, [&](Index n, std::vector<Index>& local, std::vector<Index>& S) {
-            const Region& region = regions[static_cast<std::size_t>(n)];
-            box_wavelets(W, fine_local, nf, dim, region.lo, region.hi, local, S);
-            const Index ns = static_cast<Index>(S.size());
-            const SparseMatrix b = principal_block(B, S, local);
-            // The right-hand sides R[S, DOFs of the region's nodes].
-            std::vector<Index> rows;
-            for (const Index m : region.members)
-                for (Index r = first[static_cast<std::size_t>(m)];
-                     r < first[static_cast<std::size_t>(m) + 1]; ++r)
-                    rows.push_back(r);
-            const Index nr = static_cast<Index>(rows.size());
-            Matrix rhs = Matrix::Zero(ns, nr);
-            for (Index q = 0; q < nr; ++q)
-                for (SparseMatrix::InnerIterator it(R, rows[static_cast<std::size_t>(q)]); it;
-                     ++it) {
-                    const Index r = local[static_cast<std::size_t>(it.row())];
-                    if (r >= 0) rhs(r, q) = it.value();
-                }
-            for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
-            if (ns == 0) return;
-            append_solution(b, rhs, rows, S, parts[static_cast<std::size_t>(n)]);
-        });
+    for_each_region(num_regions, nw, [&](Index n, RegionScratch& scratch) {
+        std::vector<Index>& local = scratch.local;
+        std::vector<Index>& S = scratch.S;
+        const Region& region = regions[static_cast<std::size_t>(n)];
+        box_wavelets(W, fine_local, nf, dim, region.lo, region.hi, local, S);
+        const Index ns = static_cast<Index>(S.size());
+        const SparseMatrix b = principal_block(B, S, local);
+        // The right-hand sides R[S, DOFs of the region's nodes].
+        std::vector<Index> rows;
+        for (const Index m : region.members)
+            for (Index r = first[static_cast<std::size_t>(m)];
+                 r < first[static_cast<std::size_t>(m) + 1]; ++r)
+                rows.push_back(r);
+        const Index nr = static_cast<Index>(rows.size());
+        Matrix rhs = Matrix::Zero(ns, nr);
+        for (Index q = 0; q < nr; ++q)
+            for (SparseMatrix::InnerIterator it(R, rows[static_cast<std::size_t>(q)]); it; ++it) {
+                const Index r = local[static_cast<std::size_t>(it.row())];
+                if (r >= 0) rhs(r, q) = it.value();
+            }
+        for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
+        if (ns == 0) return;
+        append_solution(b, rhs, rows, S, scratch.solver, parts[static_cast<std::size_t>(n)]);
+    });
     return from_parts(parts, static_cast<Index>(g.coarse_dofs.size()), nw);
 }
 
@@ -380,7 +410,9 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
     const std::vector<Index> fine_local = fine_local_index(g);
     const Index num_parts = static_cast<Index>(parts.size());
     std::vector<std::vector<Triplet>> out(static_cast<std::size_t>(num_parts));
-    for_each_region(num_parts, nw, [&](Index n, std::vector<Index>& local, std::vector<Index>& S) {
+    for_each_region(num_parts, nw, [&](Index n, RegionScratch& scratch) {
+        std::vector<Index>& local = scratch.local;
+        std::vector<Index>& S = scratch.S;
         const CellStiffness& part = parts[static_cast<std::size_t>(n)];
         // R^T = (W Φ)[:, T] A_T (C^† Φ)[:, T]^T, over the rows that touch T.
         IndexVector wrows, crows;
@@ -401,7 +433,7 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
         }
         for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
         if (ns == 0) return;
-        append_solution(b, rhs, std::vector<Index>(crows.begin(), crows.end()), S,
+        append_solution(b, rhs, std::vector<Index>(crows.begin(), crows.end()), S, scratch.solver,
                         out[static_cast<std::size_t>(n)]);
     });
     return from_parts(out, nc, nw);

@@ -212,6 +212,28 @@ TEST_P(MraLocalized, TruncationDropsSmallEntriesOnly) {
     }
 }
 
+TEST_P(MraLocalized, CoarseOperatorsAreTheGalerkinProductsOnEveryLevel) {
+    // Grids large enough (and C̃ sparse enough, radius 2) that A^k = C̃ A^{k+1} C̃^T takes the
+    // grouped sparse product over blocks of coarse nodes, including the partial blocks at the
+    // grid's far faces and the nodes whose DOFs were eliminated: against Eigen's own sparse
+    // products, round-off of sums in a different order (1e-12 relative).
+    const bool two_d = dim() == 2;
+    const Eigen::Vector3i cells = two_d ? Eigen::Vector3i(40, 24, 1) : Eigen::Vector3i(12, 8, 8);
+    const test::GridProblem p = test::hung_problem(dim(), cells, 1.0, 1e3, test::checker_pattern,
+                                                   cells.cast<double>() / cells[1]);
+    Options o = test::exact_options(3, refinement());
+    o.radius = {2};
+    o.truncation = 1e-7;
+    const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+    for (int k = 1; k < h.num_levels(); ++k) {
+        const Level& L = h.level(k);
+        const SparseMatrix& A_next = k + 1 == h.num_levels() ? h.A_fine : h.level(k + 1).A;
+        const SparseMatrix A = L.C_adapted * A_next * SparseMatrix(L.C_adapted.transpose());
+        EXPECT_LT((L.A - A).norm(), 1e-12 * A.norm()) << "level " << k;
+        EXPECT_EQ((L.A - SparseMatrix(L.A.transpose())).norm(), 0.0) << "level " << k;
+    }
+}
+
 TEST_P(MraLocalized, PatchRegionsSolveTheirLocalSystems) {
     // Sec. 3.5 with patches: every row i of Z vanishes outside S_i (the wavelets touching the
     // fine nodes within rho rings of node i's patch) and solves B[S_i, S_i] z = -R[S_i, i],
