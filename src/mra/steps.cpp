@@ -67,8 +67,8 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs, solve::SpdSolver& s
 }
 
 /// Per-thread scratch of the localized solves: `local`, the wavelet -> region row map (-1 for
-/// wavelets outside the region; whoever fills it restores it), the region's wavelets S, and the
-/// sparse solver, kept across regions for its symbolic analysis.
+/// wavelets outside the region; whoever fills it restores it), the region's wavelets S and its
+/// B[S, S], and the sparse solver, kept across regions for its symbolic analysis.
 struct RegionScratch {
     explicit RegionScratch(Index wavelets) : local(static_cast<std::size_t>(wavelets), -1) {
         solve::SolverOptions options;
@@ -77,6 +77,7 @@ struct RegionScratch {
     }
     std::vector<Index> local;
     std::vector<Index> S;
+    SparseMatrix b;
     solve::SpdSolver solver;
 };
 
@@ -189,26 +190,33 @@ void box_wavelets(const SparseMatrix& W, const std::vector<Index>& fine_local,
         local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
 }
 
-/// B[S, S] (both triangles), local[w] the position of wavelet w in S or -1. S is sorted, so
-/// local is increasing on S and B's sorted columns give sorted local columns.
-SparseMatrix principal_block(const SparseMatrix& B, const std::vector<Index>& S,
-                             const std::vector<Index>& local) {
+/// b = B[S, S] (both triangles), local[w] the position of wavelet w in S or -1, reusing b's
+/// storage. S is sorted, so local is increasing on S and B's sorted columns give sorted local
+/// columns.
+void principal_block(const SparseMatrix& B, const std::vector<Index>& S,
+                     const std::vector<Index>& local, SparseMatrix& b) {
     const Index ns = static_cast<Index>(S.size());
-    std::vector<Index> outer(static_cast<std::size_t>(ns) + 1, 0);
-    std::vector<Index> inner;
-    std::vector<double> values;
-    for (Index s = 0; s < ns; ++s) {
-        for (SparseMatrix::InnerIterator it(B, S[static_cast<std::size_t>(s)]); it; ++it) {
+    Index nnz = 0;
+    for (const Index w : S)
+        for (SparseMatrix::InnerIterator it(B, w); it; ++it)
+            nnz += local[static_cast<std::size_t>(it.row())] >= 0 ? 1 : 0;
+    b.resize(ns, ns);
+    b.resizeNonZeros(nnz);
+    Index* outer = b.outerIndexPtr();
+    Index* inner = b.innerIndexPtr();
+    double* value = b.valuePtr();
+    Index k = 0;
+    for (Index c = 0; c < ns; ++c) {
+        outer[c] = k;
+        for (SparseMatrix::InnerIterator it(B, S[static_cast<std::size_t>(c)]); it; ++it) {
             const Index r = local[static_cast<std::size_t>(it.row())];
             if (r >= 0) {
-                inner.push_back(r);
-                values.push_back(it.value());
+                inner[k] = r;
+                value[k++] = it.value();
             }
         }
-        outer[static_cast<std::size_t>(s) + 1] = static_cast<Index>(inner.size());
     }
-    return Eigen::Map<const SparseMatrix>(ns, ns, static_cast<Index>(inner.size()), outer.data(),
-                                          inner.data(), values.data());
+    outer[ns] = k;
 }
 
 /// The columns `cols` of M as a dense block over the rows where they have a nonzero (`rows`,
@@ -309,7 +317,8 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
         const Region& region = regions[static_cast<std::size_t>(n)];
         box_wavelets(W, fine_local, nf, dim, region.lo, region.hi, local, S);
         const Index ns = static_cast<Index>(S.size());
-        const SparseMatrix b = principal_block(B, S, local);
+        principal_block(B, S, local, scratch.b);
+        const SparseMatrix& b = scratch.b;
         // The right-hand sides R[S, DOFs of the region's nodes].
         std::vector<Index> rows;
         for (const Index m : region.members)
@@ -425,7 +434,8 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
         const Eigen::Vector3i hi = (2 * part.cell.array() + 2 + rings).min(nf.array() - 1);
         box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
         const Index ns = static_cast<Index>(S.size());
-        const SparseMatrix b = principal_block(B, S, local);
+        principal_block(B, S, local, scratch.b);
+        const SparseMatrix& b = scratch.b;
         Matrix rhs = Matrix::Zero(ns, crows.size());
         for (Index r = 0; r < wrows.size(); ++r) {
             const Index s = local[static_cast<std::size_t>(wrows[r])];

@@ -206,7 +206,10 @@ using Cg = Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper,
 // whose factorization takes 0.4 ms.
 constexpr Index kParallelNonzeros = 200000;
 
-// Hash of the sparsity pattern (sum of per-column hashes, so it can be computed in parallel).
+// Hash of the sparsity pattern: the sum of a mix of every entry's (row, column), so that the
+// entries hash independently (pipelined, and in parallel over columns). Equal patterns give
+// equal hashes; the solver compares n and nnz as well. (A per-column chain of mixes, each
+// waiting for the previous one, took 4% of the hierarchy's localized solves.)
 std::uint64_t pattern_hash(const SparseMatrix& A) {
     const auto mix = [](std::uint64_t h) {
         h ^= h >> 33;
@@ -215,13 +218,14 @@ std::uint64_t pattern_hash(const SparseMatrix& A) {
         h *= 0xc4ceb9fe1a85ec53ULL;
         return h ^ (h >> 33);
     };
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
     std::uint64_t total = 0;
 #pragma omp parallel for reduction(+ : total) schedule(static) if (A.nonZeros() > kParallelNonzeros)
     for (Index j = 0; j < A.outerSize(); ++j) {
-        std::uint64_t h = mix(static_cast<std::uint64_t>(j) + 0x9e3779b97f4a7c15ULL);
-        for (SparseMatrix::InnerIterator it(A, j); it; ++it)
-            h = mix(h ^ static_cast<std::uint64_t>(it.index()));
-        total += h;
+        const std::uint64_t column = static_cast<std::uint64_t>(j) << 32;
+        for (int k = outer[j]; k < outer[j + 1]; ++k)
+            total += mix(column | static_cast<std::uint32_t>(inner[k]));
     }
     return total;
 }
