@@ -12,11 +12,15 @@
 //     l: node- against cell-wise localization (rho 1..6 coarse rings, invariance on/off)
 //     m: canonical against stiffness-weighted measurements (global; cell-wise 2, 4, 6 coarse
 //        rings; node-wise without invariance correction 4, 6)
+//     d: Eq. 12 defect-driven radius (start 2 fine rings, doubled up to the grid) against the
+//        defect tolerance 1e-1 .. 1e-5, and fixed radii 2, 4, 8, 16 fine rings
 //
 // Columns: err_u = ||u^1 - u||_A / ||u||_A, err_g = ||u^1 - u||_A / ||g||_2 (Fig. 6/9 metric),
 // dens_C = nonzero fraction of C̃ of the finest step, dens_A = of A^1, defect = Eq. 12
 // A-orthogonality defect of the finest step ||C̃ A W^T||_F / ||C^† A W^T||_F (0 for global
-// solves, 1 for Z = 0), build = build_hierarchy wall seconds (shared machine).
+// solves, 1 for Z = 0), rings = mean / largest region rings of the finest step (fine grid),
+// build = build_hierarchy wall seconds (shared machine).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -37,6 +41,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 struct Row {
     double err_u = 0, err_g = 0, dens_C = 0, dens_A = 0, defect = 0, seconds = 0;
+    double rings_mean = 0;
+    int rings_max = 0;
 };
 
 double density(const cg::SparseMatrix& M) {
@@ -59,6 +65,14 @@ Row evaluate(const cg::test::GridProblem& p, const Options& o) {
     const cg::SparseMatrix AWt = h.A_fine * cg::SparseMatrix(F.W.transpose());
     r.defect =
         cg::SparseMatrix(F.C_adapted * AWt).norm() / cg::SparseMatrix(F.C_dagger * AWt).norm();
+    int count = 0;
+    for (const int k : F.region_rings)
+        if (k > 0) {
+            r.rings_mean += k;
+            r.rings_max = std::max(r.rings_max, k);
+            ++count;
+        }
+    if (count > 0) r.rings_mean /= count;
     return r;
 }
 
@@ -68,17 +82,20 @@ std::string radius_label(double rho, RadiusGrid g) {
 }
 
 void header() {
-    std::printf("%-10s %-6s %-4s %-4s %-9s %-7s %-8s %8s %9s %7s %7s %8s %7s\n", "problem", "rho",
-                "loc", "inv", "measure", "trunc", "contrast", "err_u", "err_g", "dens_C", "dens_A",
-                "defect", "build");
+    std::printf("%-10s %-6s %-7s %-4s %-4s %-9s %-7s %-8s %8s %9s %7s %7s %8s %9s %7s\n", "problem",
+                "rho", "tol", "loc", "inv", "measure", "trunc", "contrast", "err_u", "err_g",
+                "dens_C", "dens_A", "defect", "rings", "build");
 }
 
 void print(const char* name, const Options& o, double contrast, const Row& r) {
-    std::printf("%-10s %-6s %-4s %-4d %-9s %-7.0e %-8.0e %8.4f %9.4g %7.3f %7.3f %8.2g %7.2f\n",
-                name, radius_label(o.radius[0], o.radius_grid).c_str(),
-                cg::mra::localization_name(o.localization).c_str(), o.invariance ? 1 : 0,
-                cg::mra::measurement_name(o.measurement).c_str(), o.truncation, contrast, r.err_u,
-                r.err_g, r.dens_C, r.dens_A, r.defect, r.seconds);
+    const std::string rings =
+        std::to_string(r.rings_mean).substr(0, 4) + "/" + std::to_string(r.rings_max);
+    std::printf(
+        "%-10s %-6s %-7.0e %-4s %-4d %-9s %-7.0e %-8.0e %8.4f %9.4g %7.3f %7.3f %8.2g %9s %7.2f\n",
+        name, radius_label(o.radius[0], o.radius_grid).c_str(), o.defect_tolerance,
+        cg::mra::localization_name(o.localization).c_str(), o.invariance ? 1 : 0,
+        cg::mra::measurement_name(o.measurement).c_str(), o.truncation, contrast, r.err_u, r.err_g,
+        r.dens_C, r.dens_A, r.defect, rings.c_str(), r.seconds);
     std::fflush(stdout);
 }
 
@@ -171,6 +188,20 @@ int main(int argc, char** argv) {
                     print(pr.name, o, pr.contrast, evaluate(p, o));
                 }
             }
+        if (tables.find('d') != std::string::npos) {
+            for (const double rho : {2.0, 4.0, 8.0, 16.0}) {
+                o = base;
+                o.radius = {rho};
+                print(pr.name, o, pr.contrast, evaluate(p, o));
+            }
+            for (const double tol : {1e-1, 1e-2, 1e-3, 1e-4, 1e-5}) {
+                o = base;
+                o.radius = {2.0};
+                o.max_radius = 2.0 * cells;
+                o.defect_tolerance = tol;
+                print(pr.name, o, pr.contrast, evaluate(p, o));
+            }
+        }
     }
     if (tables.find('c') != std::string::npos)
         for (const double contrast : {1e1, 1e2, 1e3, 1e4}) {

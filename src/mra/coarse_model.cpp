@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -202,6 +203,15 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
                        "expected \"canonical\" or \"stiffness\", got \"{}\"", s);
         o.measurement = s == "canonical" ? Measurement::Canonical : Measurement::Stiffness;
     }
+    if (auto v = r.find("defect_tolerance")) {
+        o.defect_tolerance = v->number();
+        v->fail_unless(o.defect_tolerance >= 0 && std::isfinite(o.defect_tolerance),
+                       "expected a number >= 0 (0: fixed radius), got {}", o.defect_tolerance);
+    }
+    if (auto v = r.find("max_radius")) {
+        o.max_radius = v->number();
+        v->fail_unless(o.max_radius >= 1, "expected a number >= 1, got {}", o.max_radius);
+    }
     if (auto v = r.find("patch")) {
         o.patch = v->integer();
         v->fail_unless(o.patch >= 1, "expected an integer >= 1, got {}", o.patch);
@@ -284,6 +294,8 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
     m.report["options"]["patch"] = o.patch;
     m.report["options"]["localization"] = localization_name(o.localization);
     m.report["options"]["measurement"] = measurement_name(o.measurement);
+    m.report["options"]["defect_tolerance"] = o.defect_tolerance;
+    m.report["options"]["max_radius"] = o.max_radius;
     nlohmann::json levels = nlohmann::json::array();
     for (const Level& L : h.levels) {
         levels.push_back(
@@ -302,6 +314,18 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
              {"B_density", density(L.B)},
              {"Phi_bytes", storage_bytes(L.Phi)},
              {"Psi_bytes", storage_bytes(L.Psi)}});
+        double rings_sum = 0;
+        int rings_count = 0, rings_max = 0;
+        for (const int r : L.region_rings)
+            if (r > 0) {
+                rings_sum += r;
+                ++rings_count;
+                rings_max = std::max(rings_max, r);
+            }
+        if (rings_count > 0) {
+            levels.back()["region_rings_mean"] = rings_sum / rings_count;
+            levels.back()["region_rings_max"] = rings_max;
+        }
     }
     m.report["levels"] = levels;
     m.report["fine_dofs"] = h.fine_dofs.size();

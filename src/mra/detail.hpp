@@ -32,10 +32,30 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
                                        const SparseMatrix& C_dagger, const SparseMatrix& W,
                                        double tau);
 
+/// Rings of the localized solves' regions (on level k+1): `start`, and with defect_tolerance
+/// > 0, doubled per region (up to `max`) until the Eq. 12 defect of its rows falls below it.
+struct LocalizationRings {
+    int start = 1;
+    int max = 1;
+    double defect_tolerance = 0;
+};
+
+/// Z and, per node of level k, the rings of its region's final solve (0: a node without DOFs).
+struct LocalizedZ {
+    SparseMatrix Z;
+    std::vector<int> rings;
+};
+
 /// Z with localized solves (Sec. 3.5 "Fast computation"): for each coarse node i, the region
 /// R_i holds the level-(k+1) nodes within `rings` grid rings (Chebyshev distance) of the node
 /// coincident with i; S_i are the wavelets (rows of W) with a nonzero on a node of R_i; the rows
 /// of Z for the DOFs of node i solve B[S_i, S_i] z = -R[S_i, DOFs of i] and vanish outside S_i.
+///
+/// Eq. 12 defect-driven radius (rings.defect_tolerance > 0): the rows of C̃ = C^† + Z W would
+/// satisfy C̃ A W^T = 0 with global solves; the local solve makes the defect vanish on S_i
+/// only. Each region starts at rings.start and doubles its rings until the relative defect
+/// max_r ||(C̃ A W^T)[r, :]|| / ||(C^† A W^T)[r, :]|| of its rows is at most the tolerance, or
+/// the rings reach rings.max, or the region covers the grid.
 ///
 /// Patch-wise localization: with patch > 1 the coarse nodes are grouped in blocks of patch^dim
 /// nodes (by grid coordinates, block index floor(c / patch) per axis) and every node of a block
@@ -43,9 +63,10 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
 /// factorization of B[S, S] serves all its columns. Whatever the patch, nodes (or blocks) whose
 /// regions coincide after clipping to the grid share one factorization; with patch = 1 this
 /// changes nothing but the cost. The regions are processed in parallel (OpenMP), each with its
-/// own dense (small) or sparse Cholesky factorization.
-SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
-                         const StepGeometry& g, int rings, int patch);
+/// own dense (small) or sparse Cholesky factorization; regions of the same shape reuse the
+/// symbolic analysis.
+LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
+                       const StepGeometry& g, const LocalizationRings& rings, int patch);
 
 /// The part A_T of the fine operator from the fine elements inside one cell T of a coarser level
 /// (Localization::Cell): the sum of their element matrices on their present fine DOFs.

@@ -165,6 +165,14 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     CG_VERIFY(options.truncation >= 0 && options.truncation < 1,
               "mra: truncation = {} must be in [0, 1)", options.truncation);
     CG_VERIFY(options.penalty > 0, "mra: penalty = {} must be positive", options.penalty);
+    CG_VERIFY(options.defect_tolerance >= 0 && std::isfinite(options.defect_tolerance),
+              "mra: defect_tolerance = {} must be finite and at least 0 (0: fixed radius)",
+              options.defect_tolerance);
+    CG_VERIFY(options.defect_tolerance == 0 || !by_cell,
+              "mra: defect_tolerance needs node localization (cell localization has no "
+              "per-node defect)");
+    CG_VERIFY(options.max_radius >= 1, "mra: max_radius = {} must be at least 1",
+              options.max_radius);
 
     Hierarchy h;
     h.dim = dim;
@@ -295,7 +303,15 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                     detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells), g, rings);
             } else {
                 const Phase phase(tag + "Z (localized solves)", &h.timings);
-                Z = detail::localized_z(L.B, R, L.W, g, rings, options.patch);
+                const int per_radius = options.radius_grid == RadiusGrid::Coarse ? 2 : 1;
+                detail::LocalizationRings lr;
+                lr.start = rings;
+                lr.max = std::max(rings, static_cast<int>(std::min(
+                                             std::floor(options.max_radius) * per_radius, 1e6)));
+                lr.defect_tolerance = options.defect_tolerance;
+                detail::LocalizedZ lz = detail::localized_z(L.B, R, L.W, g, lr, options.patch);
+                Z = std::move(lz.Z);
+                L.region_rings = std::move(lz.rings);
             }
             const Phase phase(tag + "C adapted", &h.timings);
             L.C_adapted = L.C_dagger + product(Z, L.W);
@@ -347,10 +363,14 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             // touches, within phi_reach (+1 for the linear C^†) of node i, and a cell's region
             // reaches `rings` beyond the cell, 2 rings beyond its nodes.
             const int linear = options.refinement == Refinement::Linear ? 1 : 0;
+            const int max_region_rings =
+                L.region_rings.empty()
+                    ? rings
+                    : *std::max_element(L.region_rings.begin(), L.region_rings.end());
             const int reach = std::isinf(L.radius) ? nf.maxCoeff()
                               : by_cell
                                   ? rings + 2 + basis_reach(h, Phi_present, k + 1) + 2 * linear
-                                  : rings + 2 * (options.patch - 1) + linear;
+                                  : max_region_rings + 2 * (options.patch - 1) + linear;
             for (Index i = 0; i < coarse_nodes; ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)

@@ -66,19 +66,27 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs, solve::SpdSolver& s
     return llt.solve(rhs);
 }
 
+/// Options of the local CHOLMOD factorizations: AMD alone (METIS costs more than it saves on
+/// many small systems).
+solve::SolverOptions local_options() {
+    solve::SolverOptions options;
+    options.amd_only = true;
+    return options;
+}
+
 /// Per-thread scratch of the localized solves: `local`, the wavelet -> region row map (-1 for
 /// wavelets outside the region; whoever fills it restores it), the region's wavelets S and its
-/// B[S, S], and the sparse solver, kept across regions for its symbolic analysis.
+/// B[S, S], a zero vector over the wavelets, and the sparse solvers, one per growth step of
+/// the region (Eq. 12 defect-driven radius), kept across regions for their symbolic analyses.
 struct RegionScratch {
-    explicit RegionScratch(Index wavelets) : local(static_cast<std::size_t>(wavelets), -1) {
-        solve::SolverOptions options;
-        options.amd_only = true;
-        solver = solve::SpdSolver(options);
-    }
+    explicit RegionScratch(Index wavelets)
+        : local(static_cast<std::size_t>(wavelets), -1),
+          work(static_cast<std::size_t>(wavelets), 0.0) {}
     std::vector<Index> local;
     std::vector<Index> S;
     SparseMatrix b;
-    solve::SpdSolver solver;
+    std::vector<double> work;
+    std::vector<solve::SpdSolver> solvers;
 };
 
 }  // namespace
@@ -114,17 +122,29 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
 
 namespace {
 
-/// A box of level-(k+1) nodes (inclusive grid coordinates) and the coarse nodes (indices into
-/// the node list of localized_z) whose rows of Z are solved on it.
+/// A patch of coarse nodes (indices into the node list of localized_z) whose rows of Z are
+/// solved on one box of level-(k+1) nodes: those within `rings` of the patch's nodes, whose
+/// positions on level k+1 span [first, last] (grid coordinates).
 struct Region {
-    Eigen::Vector3i lo, hi;
-    Eigen::Vector3i anchor;  ///< level-(k+1) grid coordinates of the patch's first node
+    Eigen::Vector3i first, last;
     std::vector<Index> members;
+
+    /// The box's corners (inclusive), clipped to a grid of nf nodes per axis.
+    std::pair<Eigen::Vector3i, Eigen::Vector3i> box(int rings, const Eigen::Vector3i& nf) const {
+        return {(first.array() - rings).max(0), (last.array() + rings).min(nf.array() - 1)};
+    }
+    /// Offsets of the box's corners from `first`: regions with equal keys have the same local
+    /// pattern (but near a Dirichlet boundary).
+    std::array<int, 6> shape(int rings, const Eigen::Vector3i& nf) const {
+        const auto [lo, hi] = box(rings, nf);
+        const Eigen::Vector3i a = lo - first, b = hi - first;
+        return {a[0], a[1], a[2], b[0], b[1], b[2]};
+    }
 };
 
-/// Regions of the localized solves: per patch of coarse nodes, the fine nodes within `rings` of
-/// the patch's nodes, clipped to the grid; patches whose boxes coincide are merged. Sorted by
-/// shape.
+/// Regions of the localized solves: one per patch of coarse nodes, patches whose boxes of
+/// `rings` coincide merged, sorted by shape so that consecutive regions reuse the solver's
+/// symbolic analysis.
 std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeometry& g, int rings,
                                   int patch) {
     const int dim = g.dim;
@@ -136,21 +156,19 @@ std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeo
         const Eigen::Vector3i c = node_coordinates(nodes[n], g.coarse_cells, dim);
         const Eigen::Vector3i first = (c.array() / patch) * patch;
         const Eigen::Vector3i last = (first.array() + patch - 1).min(nc.array() - 1);
-        const Eigen::Vector3i lo = (2 * first.array() - rings).max(0);
-        const Eigen::Vector3i hi = (2 * last.array() + rings).min(nf.array() - 1);
+        const Region candidate{2 * first, 2 * last, {}};
+        const auto [lo, hi] = candidate.box(rings, nf);
         const std::array<int, 6> key{lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
         const auto [it, added] = index.emplace(key, regions.size());
-        if (added) regions.push_back({lo, hi, 2 * first, {}});
-        regions[it->second].members.push_back(static_cast<Index>(n));
+        if (added) regions.push_back(candidate);
+        Region& r = regions[it->second];
+        r.first = r.first.cwiseMin(2 * first);
+        r.last = r.last.cwiseMax(2 * last);
+        r.members.push_back(static_cast<Index>(n));
     }
-    // Regions of the same shape, clipped alike, have the same local pattern (but near a
-    // Dirichlet boundary): consecutive, they reuse the solver's symbolic analysis.
-    const auto shape = [](const Region& r) {
-        const Eigen::Vector3i a = r.lo - r.anchor, b = r.hi - r.anchor;
-        return std::array<int, 6>{a[0], a[1], a[2], b[0], b[1], b[2]};
-    };
-    std::stable_sort(regions.begin(), regions.end(),
-                     [&](const Region& a, const Region& b) { return shape(a) < shape(b); });
+    std::stable_sort(regions.begin(), regions.end(), [&](const Region& a, const Region& b) {
+        return a.shape(rings, nf) < b.shape(rings, nf);
+    });
     return regions;
 }
 
@@ -237,17 +255,51 @@ Matrix column_block(const SparseMatrix& M, const IndexVector& cols, IndexVector&
     return block;
 }
 
-/// Solves b x = rhs and appends -x as entries (rows[q], S[s]) of Z.
-void append_solution(const SparseMatrix& b, const Matrix& rhs, const std::vector<Index>& rows,
-                     const std::vector<Index>& S, solve::SpdSolver& solver,
+/// Appends -x as entries (rows[q], S[s]) of Z.
+void append_solution(const Matrix& x, const std::vector<Index>& rows, const std::vector<Index>& S,
                      std::vector<Triplet>& part) {
-    const Matrix x = local_solve(b, rhs, solver);
     part.reserve(part.size() + static_cast<std::size_t>(x.size()));
     for (Index q = 0; q < x.cols(); ++q)
         for (Index s = 0; s < x.rows(); ++s)
             if (x(s, q) != 0.0)
                 part.emplace_back(rows[static_cast<std::size_t>(q)], S[static_cast<std::size_t>(s)],
                                   -x(s, q));
+}
+
+/// The A-orthogonality defect of Eq. 12 of the rows `rows` of C̃ = C^† + Z W whose Z rows are
+/// -x on the wavelets S (zero elsewhere): row r of C̃ A W^T is R[:, r]^T - x[:, q]^T B[S, :],
+/// zero on S (the local solve) and not outside it. Returns the largest relative defect
+/// ||R[:, r] - B[:, S] x[:, q]|| / ||R[:, r]|| over the rows (0 for rows with R[:, r] = 0).
+/// `work` (#wavelets, zero) is used and left zero.
+double orthogonality_defect(const SparseMatrix& B, const SparseMatrix& R, const Matrix& x,
+                            const std::vector<Index>& rows, const std::vector<Index>& S,
+                            std::vector<double>& work) {
+    double worst = 0;
+    std::vector<Index> touched;
+    for (Index q = 0; q < x.cols(); ++q) {
+        touched.clear();
+        double r2 = 0;
+        for (SparseMatrix::InnerIterator it(R, rows[static_cast<std::size_t>(q)]); it; ++it) {
+            work[static_cast<std::size_t>(it.row())] += it.value();
+            touched.push_back(static_cast<Index>(it.row()));
+            r2 += it.value() * it.value();
+        }
+        for (std::size_t s = 0; s < S.size(); ++s) {
+            const double xs = x(static_cast<Index>(s), q);
+            for (SparseMatrix::InnerIterator it(B, S[s]); it; ++it) {
+                work[static_cast<std::size_t>(it.row())] -= it.value() * xs;
+                touched.push_back(static_cast<Index>(it.row()));
+            }
+        }
+        double d2 = 0;
+        for (const Index w : touched) {
+            double& v = work[static_cast<std::size_t>(w)];
+            d2 += v * v;
+            v = 0;
+        }
+        if (r2 > 0) worst = std::max(worst, std::sqrt(d2 / r2));
+    }
+    return worst;
 }
 
 /// Z (#rows by #cols) from per-region entries (duplicates summed), freeing them on the way.
@@ -290,12 +342,13 @@ void for_each_region(Index count, Index nw, F&& solve) {
 
 }  // namespace
 
-SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
-                         const StepGeometry& g, int rings, int patch) {
+LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
+                       const StepGeometry& g, const LocalizationRings& rings, int patch) {
     const int dim = g.dim;
     const Index nw = static_cast<Index>(W.rows());
     const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
     const std::vector<Index> fine_local = fine_local_index(g);
+    const bool adaptive = rings.defect_tolerance > 0 && rings.max > rings.start;
 
     // Kept coarse DOFs grouped by node: rows [first[n], first[n+1]) of Z belong to node nodes[n].
     std::vector<Index> nodes, first;
@@ -307,36 +360,54 @@ SparseMatrix localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spa
         }
     }
     first.push_back(static_cast<Index>(g.coarse_dofs.size()));
-    const std::vector<Region> regions = patch_regions(nodes, g, rings, patch);
+    const std::vector<Region> regions = patch_regions(nodes, g, rings.start, patch);
     const Index num_regions = static_cast<Index>(regions.size());
 
+    LocalizedZ out;
+    out.rings.assign(static_cast<std::size_t>(grid_nodes(g.coarse_cells, dim)), 0);
     std::vector<std::vector<Triplet>> parts(static_cast<std::size_t>(num_regions));
     for_each_region(num_regions, nw, [&](Index n, RegionScratch& scratch) {
         std::vector<Index>& local = scratch.local;
         std::vector<Index>& S = scratch.S;
         const Region& region = regions[static_cast<std::size_t>(n)];
-        box_wavelets(W, fine_local, nf, dim, region.lo, region.hi, local, S);
-        const Index ns = static_cast<Index>(S.size());
-        principal_block(B, S, local, scratch.b);
-        const SparseMatrix& b = scratch.b;
-        // The right-hand sides R[S, DOFs of the region's nodes].
+        // The rows of Z of the region's nodes.
         std::vector<Index> rows;
         for (const Index m : region.members)
             for (Index r = first[static_cast<std::size_t>(m)];
                  r < first[static_cast<std::size_t>(m) + 1]; ++r)
                 rows.push_back(r);
         const Index nr = static_cast<Index>(rows.size());
-        Matrix rhs = Matrix::Zero(ns, nr);
-        for (Index q = 0; q < nr; ++q)
-            for (SparseMatrix::InnerIterator it(R, rows[static_cast<std::size_t>(q)]); it; ++it) {
-                const Index r = local[static_cast<std::size_t>(it.row())];
-                if (r >= 0) rhs(r, q) = it.value();
-            }
-        for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
-        if (ns == 0) return;
-        append_solution(b, rhs, rows, S, scratch.solver, parts[static_cast<std::size_t>(n)]);
+        Matrix x;
+        int r = rings.start;
+        for (std::size_t attempt = 0;; ++attempt) {
+            const auto [lo, hi] = region.box(r, nf);
+            box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
+            const Index ns = static_cast<Index>(S.size());
+            principal_block(B, S, local, scratch.b);
+            // The right-hand sides R[S, rows].
+            Matrix rhs = Matrix::Zero(ns, nr);
+            for (Index q = 0; q < nr; ++q)
+                for (SparseMatrix::InnerIterator it(R, rows[static_cast<std::size_t>(q)]); it;
+                     ++it) {
+                    const Index l = local[static_cast<std::size_t>(it.row())];
+                    if (l >= 0) rhs(l, q) = it.value();
+                }
+            for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
+            if (ns == 0) return;
+            if (scratch.solvers.size() <= attempt) scratch.solvers.emplace_back(local_options());
+            x = local_solve(scratch.b, rhs, scratch.solvers[attempt]);
+            const bool whole = (lo.array() == 0).all() && (hi.array() == nf.array() - 1).all();
+            if (!adaptive || r >= rings.max || whole ||
+                orthogonality_defect(B, R, x, rows, S, scratch.work) <= rings.defect_tolerance)
+                break;
+            r = std::min(2 * r, rings.max);
+        }
+        for (const Index m : region.members)
+            out.rings[static_cast<std::size_t>(nodes[static_cast<std::size_t>(m)])] = r;
+        append_solution(x, rows, S, parts[static_cast<std::size_t>(n)]);
     });
-    return from_parts(parts, static_cast<Index>(g.coarse_dofs.size()), nw);
+    out.Z = from_parts(parts, static_cast<Index>(g.coarse_dofs.size()), nw);
+    return out;
 }
 
 std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
@@ -443,7 +514,9 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
         }
         for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
         if (ns == 0) return;
-        append_solution(b, rhs, std::vector<Index>(crows.begin(), crows.end()), S, scratch.solver,
+        if (scratch.solvers.empty()) scratch.solvers.emplace_back(local_options());
+        append_solution(local_solve(b, rhs, scratch.solvers.front()),
+                        std::vector<Index>(crows.begin(), crows.end()), S,
                         out[static_cast<std::size_t>(n)]);
     });
     return from_parts(out, nc, nw);

@@ -88,9 +88,11 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.truncation, 1e-7);
     EXPECT_TRUE(d.invariance);
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
+    EXPECT_EQ(d.defect_tolerance, 0.0);
+    EXPECT_EQ(d.max_radius, 16.0);
     const Options o =
         parse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
-                        "radius_grid": "coarse", "localization": "cell", "measurement": "stiffness", "patch": 2, "truncation": 1e-5,
+                        "radius_grid": "coarse", "defect_tolerance": 1e-3, "max_radius": 12, "localization": "cell", "measurement": "stiffness", "patch": 2, "truncation": 1e-5,
                         "invariance": false, "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
                       "t");
     EXPECT_EQ(o.levels, 4);
@@ -100,6 +102,8 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_TRUE(std::isinf(o.radius[1]));
     EXPECT_EQ(o.radius[2], 3.5);
     EXPECT_EQ(o.radius_grid, RadiusGrid::Coarse);
+    EXPECT_EQ(o.defect_tolerance, 1e-3);
+    EXPECT_EQ(o.max_radius, 12.0);
     EXPECT_EQ(o.localization, Localization::Cell);
     EXPECT_EQ(o.measurement, Measurement::Stiffness);
     EXPECT_EQ(o.patch, 2);
@@ -126,6 +130,9 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
         {R"({"measurement": "mass"})",
          "coarse.measurement: expected \"canonical\" or \"stiffness\", got \"mass\""},
         {R"({"patch": 0})", "coarse.patch"},
+        {R"({"defect_tolerance": -1e-3})",
+         "coarse.defect_tolerance: expected a number >= 0 (0: fixed radius), got -0.001"},
+        {R"({"max_radius": 0.5})", "coarse.max_radius: expected a number >= 1, got 0.5"},
         {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
         {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},
         {R"({"dirichlet": "clamp"})", "coarse.dirichlet: expected \"constrain\""},

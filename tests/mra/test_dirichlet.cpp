@@ -1,8 +1,7 @@
 // Dirichlet conditions in the hierarchy: carried to every level, and the four treatments
 // compared (hierarchy.hpp documents the measured table).
-#include <gtest/gtest.h>
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <cstdio>
 #include <map>
@@ -50,10 +49,10 @@ TEST_P(MraDirichlet, FixedNodesStayFixedAtEveryLevel) {
                 // Elimination and constraint leave the fixed DOFs out of every basis function:
                 // exactly zero. The penalty 1e8 (absolute with E <= 1e3 here, or times K_ii)
                 // leaves displacements of order 1e-8 relative; the bound is 1e-6.
-                const double bound = t == DirichletTreatment::Constrain ||
-                                             t == DirichletTreatment::Eliminate
-                                         ? 0.0
-                                         : 1e-6 * u.cwiseAbs().maxCoeff();
+                const double bound =
+                    t == DirichletTreatment::Constrain || t == DirichletTreatment::Eliminate
+                        ? 0.0
+                        : 1e-6 * u.cwiseAbs().maxCoeff();
                 EXPECT_LE(max_at(u, p.bc.dofs), bound)
                     << dirichlet_name(t) << (localized ? " localized" : " global") << ", level "
                     << k;
@@ -98,8 +97,8 @@ TEST(MraDirichletTreatmentsSlow, ConstrainKeepsTheRicherSpaceWithoutThePenalty) 
                 const Row row{test::energy_norm(p.K, u1 - p.u) / u_norm,
                               condition_number(h.level(1).A),
                               max_at(u1, p.bc.dofs) / u1.cwiseAbs().maxCoeff()};
-                const std::string key = fmt::format("E x {:g}, {} {}", scale, refinement_name(r),
-                                                    dirichlet_name(t));
+                const std::string key =
+                    fmt::format("E x {:g}, {} {}", scale, refinement_name(r), dirichlet_name(t));
                 rows[key] = row;
                 std::printf("%-36s error %.4f  cond(A^1) %.3g  max|u fixed|/max|u| %.2g\n",
                             key.c_str(), row.error, row.cond, row.fixed);

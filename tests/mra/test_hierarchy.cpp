@@ -19,7 +19,8 @@ class MraGlobal : public ::testing::TestWithParam<GlobalParam> {
     DirichletTreatment treatment() const { return std::get<2>(GetParam()); }
     // 8x8 (2D) or 4x4x4 (3D) cells, 3 levels, contrast 1000.
     test::GridProblem problem() const {
-        const Eigen::Vector3i cells = dim() == 2 ? Eigen::Vector3i(8, 8, 1) : Eigen::Vector3i(4, 4, 4);
+        const Eigen::Vector3i cells =
+            dim() == 2 ? Eigen::Vector3i(8, 8, 1) : Eigen::Vector3i(4, 4, 4);
         return test::hung_problem(dim(), cells, 1.0, 1e3, test::checker_pattern);
     }
     Options options() const {
@@ -101,18 +102,18 @@ TEST_P(MraGlobal, CoarseLevelsAreGalerkinProjections) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Mra, MraGlobal,
-    ::testing::Combine(::testing::Values(2, 3),
-                       ::testing::Values(Refinement::Dirac, Refinement::Linear),
-                       ::testing::Values(DirichletTreatment::Constrain,
-                                         DirichletTreatment::Eliminate,
-                                         DirichletTreatment::DiagonalPenalty)),
-    [](const auto& p) {
-        return std::to_string(std::get<0>(p.param)) + "D_" +
-               refinement_name(std::get<1>(p.param)) + "_" +
-               dirichlet_name(std::get<2>(p.param));
-    });
+INSTANTIATE_TEST_SUITE_P(Mra, MraGlobal,
+                         ::testing::Combine(::testing::Values(2, 3),
+                                            ::testing::Values(Refinement::Dirac,
+                                                              Refinement::Linear),
+                                            ::testing::Values(DirichletTreatment::Constrain,
+                                                              DirichletTreatment::Eliminate,
+                                                              DirichletTreatment::DiagonalPenalty)),
+                         [](const auto& p) {
+                             return std::to_string(std::get<0>(p.param)) + "D_" +
+                                    refinement_name(std::get<1>(p.param)) + "_" +
+                                    dirichlet_name(std::get<2>(p.param));
+                         });
 
 // Eq. 10 gives the unique minimizer of Eq. 9, so it must equal the closed form of the
 // constrained minimization computed independently with dense matrices,

@@ -65,7 +65,8 @@ TEST(MraHomogenization, CoarsestLevelBeatsAveragedBilinearElements) {
     const Eigen::Vector3i cells(16, 16, 1);
     const test::GridProblem p = test::hung_problem(2, cells, 1.0, 1e3, test::checker_pattern,
                                                    Eigen::Vector3d::Ones(), false);
-    const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, test::exact_options(4, Refinement::Linear));
+    const Hierarchy h =
+        build_hierarchy(p.mesh, p.K, p.bc.dofs, test::exact_options(4, Refinement::Linear));
     MultilevelSolver solver(h);
     const double u_norm = test::energy_norm(p.K, p.u);
     const double e_mra = test::energy_norm(p.K, solver.solve_level(p.f, 1) - p.u) / u_norm;
@@ -89,11 +90,12 @@ TEST(MraHomogenization, CoarsestLevelBeatsAveragedBilinearElements) {
     const SparseMatrix Kc = fem::stiffness_matrix(coarse, mats);
     // Coarse bilinear hats are the canonical linear refinement of the fine ones (Eq. 6), so the
     // chain C = C^1 C^2 C^3 gives the Galerkin load C f and the interpolation u = C^T u_c.
-    SparseMatrix C = expand_to_dofs(canonical_refinement(Eigen::Vector3i(2, 2, 1), 2, Refinement::Linear), 2);
+    SparseMatrix C =
+        expand_to_dofs(canonical_refinement(Eigen::Vector3i(2, 2, 1), 2, Refinement::Linear), 2);
     for (int s = 2; s <= 8; s *= 2)
-        C = SparseMatrix(C * expand_to_dofs(canonical_refinement(Eigen::Vector3i(s, s, 1), 2,
-                                                                 Refinement::Linear),
-                                            2));
+        C = SparseMatrix(
+            C * expand_to_dofs(
+                    canonical_refinement(Eigen::Vector3i(s, s, 1), 2, Refinement::Linear), 2));
     fem::Dirichlet bc;
     bc.fix_nodes({6, 7, 8}, Eigen::Vector2d::Zero());  // the top row of the 3x3 nodes
     const fem::ReducedSystem sys = fem::reduce(Kc, C * p.f, bc);

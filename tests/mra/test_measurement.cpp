@@ -33,7 +33,8 @@ TEST(MraMeasurementWeights, UniformOnOneMaterialAndScaledByTheStiffness) {
     // Every node of a one-material grid, corners and faces included, gets the same weight: the
     // element diagonal is the same at every corner of every element (reflection symmetry).
     for (const int dim : {2, 3}) {
-        const Eigen::Vector3i cells = dim == 2 ? Eigen::Vector3i(4, 3, 1) : Eigen::Vector3i(4, 3, 2);
+        const Eigen::Vector3i cells =
+            dim == 2 ? Eigen::Vector3i(4, 3, 1) : Eigen::Vector3i(4, 3, 2);
         const test::GridProblem p =
             test::hung_problem(dim, cells, 5.0, 5.0, [](const Eigen::VectorXd&) { return 1; });
         const Vector w = stiffness_weights(p.K, p.mesh.elements, dim);
@@ -122,8 +123,9 @@ TEST(MraMeasurementLocalized, StiffnessWeightsLocalizeALayeredColumn) {
     sc.radius = {8};
     sc.localization = Localization::Cell;
     const double stiffness_cell = coarsest_error(p, sc);
-    std::printf("layered column: canonical global %.4g cell %.4g; stiffness global %.4g cell %.4g\n",
-                canonical_global, canonical_cell, stiffness_global, stiffness_cell);
+    std::printf(
+        "layered column: canonical global %.4g cell %.4g; stiffness global %.4g cell %.4g\n",
+        canonical_global, canonical_cell, stiffness_global, stiffness_cell);
     EXPECT_LT(stiffness_cell, 1.5 * stiffness_global);
     EXPECT_LT(stiffness_cell, canonical_cell / 3);
 }

@@ -14,7 +14,9 @@ class MraRefinement : public ::testing::TestWithParam<RefinementParam> {
   protected:
     int dim() const { return std::get<0>(GetParam()); }
     Refinement refinement() const { return std::get<1>(GetParam()); }
-    Eigen::Vector3i coarse_cells() const { return dim() == 2 ? Eigen::Vector3i(3, 2, 1) : Eigen::Vector3i(2, 3, 2); }
+    Eigen::Vector3i coarse_cells() const {
+        return dim() == 2 ? Eigen::Vector3i(3, 2, 1) : Eigen::Vector3i(2, 3, 2);
+    }
     // All DOFs of the fine grid present.
     IndexVector all_fine_dofs() const {
         const Index n = dim() * grid_nodes(2 * coarse_cells(), dim());
@@ -121,7 +123,7 @@ INSTANTIATE_TEST_SUITE_P(Mra, MraRefinement,
                          [](const auto& p) {
                              return std::to_string(std::get<0>(p.param)) + "D_" +
                                     (std::get<1>(p.param) == Refinement::Dirac ? "Dirac"
-                                                                                  : "Linear");
+                                                                               : "Linear");
                          });
 
 TEST(MraRefinementExpand, KroneckerWithIdentity) {

@@ -17,6 +17,8 @@ namespace coarsegrain::mra {
 /// - "radius": number >= 1, "inf", or an array of levels - 1 of them, entry k-1 for the step
 ///   that builds level k (default "inf": global solves);
 /// - "radius_grid": "fine" (default) | "coarse";
+/// - "defect_tolerance": number >= 0 (default 0, Options::defect_tolerance), "max_radius":
+///   number >= 1 (default 16);
 /// - "localization": "node" (default) | "cell" (Localization; finite radii only);
 /// - "measurement": "canonical" (default) | "stiffness" (Measurement; no effect on Dirac);
 /// - "truncation": number in [0, 1) (default 1e-7, Options::truncation);

@@ -128,17 +128,42 @@
 /// coarser steps measure canonically again. On the localization study (bench_mra_localization
 /// 32 3 m, 32x32, 3 levels, no truncation, coarsest error, canonical / stiffness):
 ///
-/// | problem                     | global          | cell 4c       | cell 6c       | node 6c, no corr. |
+/// | problem                     | global          | cell 4c       | cell 6c       | node 6c, no
+/// corr. |
 /// |-----------------------------|-----------------|---------------|---------------|-------------------|
-/// | checker square              | 0.0116 / 0.0267 | 0.071 / 0.042 | 0.0117 / 0.027| 0.27 / 0.089      |
-/// | layered (along the hanging) | 0.035 / 0.107   | 0.65 / 0.62   | 0.41 / 0.26   | 0.036 / 0.29      |
-/// | layered across              | 0.0041 / 0.0086 | 0.083 / 0.21  | 0.064 / 0.12  | 0.94 / 0.98       |
+/// | checker square              | 0.0116 / 0.0267 | 0.071 / 0.042 | 0.0117 / 0.027| 0.27 / 0.089 |
+/// | layered (along the hanging) | 0.035 / 0.107   | 0.65 / 0.62   | 0.41 / 0.26   | 0.036 / 0.29 |
+/// | layered across              | 0.0041 / 0.0086 | 0.083 / 0.21  | 0.064 / 0.12  | 0.94 / 0.98 |
 ///
 /// So it is an option for layers as thick as the coarse cells of the finest step (measured 0.006
 /// against 0.60 in MraMeasurementLocalized), not a default. Weighting every step with the
 /// diagonal of A^{k+1} (an experiment) fixed the 2D accordion's middle step at 64x16 (level 2:
 /// 0.016 against 0.77) but not its coarsest step (0.80, global 0.021), and made A^1 of the 3D
 /// accordion singular at rho = 2.
+///
+/// ## Defect-driven radius (Options::defect_tolerance, max_radius)
+/// Each region starts at the step's radius and doubles it until its rows meet Eq. 12 to the
+/// tolerance: ||(C̃ A W^T)[r, :]|| <= tol ||(C^† A W^T)[r, :]|| (the local solve zeroes the
+/// defect on the region's wavelets; what remains is B's coupling across the region's border).
+/// Measured (bench_mra_localization 64 3 d: 64x64 hung squares, 3 levels, bilinear, no
+/// truncation, invariance correction, start 2 fine rings, max 128; err = coarsest
+/// ||u^1 - u||_A / ||u||_A, rings = mean over the finest step's nodes, build s; 2 threads):
+///
+/// | problem           | global     | fixed 8 / 16 rings | tol 1e-2 | 1e-3     | 1e-4     | 1e-5     |
+/// |-------------------|------------|--------------------|----------|----------|----------|----------|
+/// | square, err       | 0.0047     | 0.76 / 0.039       | 0.90     | 0.83     | 0.78     | 0.041    |
+/// | rings, build s    | -, 8.2     | 8, 2.1 / 16, 12.5  | 10, 6.5  | 15, 13.3 | 22, 28.1 | 28, 38.4 |
+/// | layered, err      | 0.016      | 0.97 / 0.087       | 0.97     | 0.83     | 0.78     | 0.025    |
+/// | rings, build s    | -, 8.4     | 8, 2.5 / 16, 10.9  | 10, 7.7  | 13, 12.3 | 16, 30.9 | 27, 42.8 |
+/// | across, err       | 0.0018     | 0.94 / 0.31        | 0.97     | 0.94     | 0.95     | 0.033    |
+/// | rings, build s    | -, 7.2     | 8, 2.3 / 16, 11.1  | 10, 8.4  | 13, 16.3 | 16, 28.4 | 27, 39.3 |
+///
+/// The criterion works as specified, but on these problems it does not pay: the coarsest error
+/// stays near 1 until the defect is ~1e-5 (tol 1e-4 still leaves 0.78 at a global defect of
+/// 2e-5), and reaching it grows the regions to 27-28 rings, nearly the grid, for 5x the
+/// global build. A fixed radius of 16 is as accurate for a third of that. The reason is the
+/// amplification described above: a small defect in every basis function adds up over the
+/// smooth, large deformation. Off by default.
 ///
 /// ## Cost in 3D (bench/bench_mra)
 /// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
@@ -189,16 +214,29 @@
 ///
 /// Table 1's setting (bench_mra 40 20 20 2 5: 18,081 nodes, checker contrast 1000, two levels,
 /// rho = 5 fine rings, truncation 1e-7; idle machine, 2 threads; the paper's desktop: 15.1 s,
-/// 390 MB). The localized solves then ran one BLAS thread per OpenMP thread, CHOLMOD (AMD)
-/// from 1000 unknowns and the solver's O(nnz) symmetry check; before: build 182 s (solves 158 s).
+/// 390 MB). Rows: (a) before session 11; (b) one BLAS thread per OpenMP thread, CHOLMOD (AMD)
+/// from 1000 unknowns, the O(nnz) symmetry check; (c) now: the Galerkin product by blocks of
+/// 2x2x2 coarse nodes (detail::congruence), symbolic analyses reused across regions of the
+/// same shape (regions sorted by shape; B keeps its structural pattern, or cancellations that
+/// depend on the material would give regions of one shape different patterns), B[S, S] built
+/// in place. Peak = the bench's high-water mark (fine problem and its solve included).
 ///
-/// | patch | build s | solves s | A^1 s | storage MB | peak MB | coarsest error |
-/// |-------|---------|----------|-------|------------|---------|----------------|
-/// | 1     | 68.7    | 49.3     | 15.5  | 610        | 2117    | 0.58           |
-/// | 2     | 52.6    | 17.0     | 30.5  | 769        | 2820    | 0.48           |
+/// | patch | row | build s | solves s | A^1 s | storage MB | peak MB | coarsest error |
+/// |-------|-----|---------|----------|-------|------------|---------|----------------|
+/// | 1     | (a) | 182     | 158      | 20.4  | 610        | 2023    | 0.58           |
+/// | 1     | (b) | 68.7    | 49.3     | 15.5  | 610        | 2117    | 0.58           |
+/// | 1     | (c) | 39.1    | 30.0     | 5.9   | 611        | 1393    | 0.58           |
+/// | 2     | (b) | 52.6    | 17.0     | 30.5  | 769        | 2820    | 0.48           |
+/// | 2     | (c) | 22.0    | 10.2     | 7.7   | 771        | 1848    | 0.48           |
 ///
-/// The remaining cost is the Galerkin product A^1 = C̃ A C̃^T (sparse, ~1e10 multiply-adds for
-/// 22M entries of C̃) and, at patch 1, 2,541 factorizations of ~3,500 unknowns (39 ms each).
+/// Growth with the grid (same setting, patch 1, (c); nodes: build s, storage MB): 1,377: 1.9,
+/// 22; 4,225: 9.6, 101; 9,537: 19.7, 284; 18,081: 39.7, 611. From 4,225 to 18,081 nodes (4.3x)
+/// the build grows 4.1x, close to linear (small grids clip most regions at the boundary).
+/// Where the time goes at patch 1 (perf): the 2,541 local CHOLMOD factorizations (~3,500
+/// unknowns, 2e8 flops each): numeric 40% of the solves, CHOLMOD's permuted transpose of the
+/// input 25%, the symbolic analyses left (regions of new shapes) 15%, the input checks and
+/// B[S, S] the rest. A^1 is 36% dense: its factorization (3.3 s) is slower than the fine one
+/// (2.3 s) at this radius.
 #include <limits>
 #include <string>
 #include <vector>
@@ -262,6 +300,15 @@ struct Options {
     /// factorization of B^k for all columns of Z).
     std::vector<double> radius = {std::numeric_limits<double>::infinity()};
     RadiusGrid radius_grid = RadiusGrid::Fine;
+    /// Eq. 12 defect-driven radius (node localization, finite radii; 0: off). The localized
+    /// solves make C̃ A^{k+1} W^T = 0 (Eq. 12) hold only on each region's wavelets. With a
+    /// tolerance, each region starts at its step's radius and doubles it until the relative
+    /// defect of its rows, ||(C̃ A W^T)[r, :]|| / ||(C^† A W^T)[r, :]||, is at most the
+    /// tolerance, or the radius reaches max_radius, or the region covers the grid. See
+    /// "Defect-driven radius" above.
+    double defect_tolerance = 0;
+    /// Largest radius of the defect-driven growth (same grid as radius).
+    double max_radius = 16;
     /// Patch-wise localization (finite radii only): coarse nodes per axis of a patch. The
     /// nodes of a patch (a block of patch^dim coarse nodes) share one region, the fine nodes
     /// within rho rings of any of them, and one factorization of B^k on it for all their
@@ -309,7 +356,11 @@ struct Level {
     SparseMatrix B;          ///< B^k = W^k A^{k+1} W^{k,T} (Alg. 1 line 2)
     SparseMatrix Phi;  ///< Φ^k = C̃^k Φ^{k+1}: #dofs by fine grid DOFs (if store_bases, else 0x0)
     SparseMatrix Psi;   ///< Ψ^k = W^k Φ^{k+1}: #wavelets by fine grid DOFs (if store_bases)
-    double radius = 0;  ///< rho used for this step
+    double radius = 0;  ///< rho used for this step (the starting one with defect_tolerance)
+    /// Per node of level k: the rings of level k+1 of its region's final localized solve (the
+    /// radius on the fine grid; grown with defect_tolerance); 0 for global solves, cell
+    /// localization and nodes without DOFs.
+    std::vector<int> region_rings;
     /// Per node of level k+1: 1 if the invariance correction was applied to its columns of C̃.
     std::vector<char> invariance_applied;
     /// Per node of level k: 1 if it lies on a fixed node of the finest grid. The invariance
