@@ -20,14 +20,14 @@ SparseMatrix symmetrized(const SparseMatrix& M);
 /// M X M^T for symmetric X, exactly symmetric: the lower triangle is computed and mirrored.
 ///
 /// `groups` partitions the rows of M (the columns of the result) into groups of rows with
-/// nearby supports, e.g. node_blocks of the coarse level. When the dense form does not pay,
-/// each group J of at most kMaxGroup rows is done at once: (X M^T)[:, J] is accumulated densely
-/// over the union of the supports of M's rows J, then M (X M^T)[:, J]. Every column of M is
-/// read once per group instead of once per row of M, and the inner loops are dense |J|-wide
-/// multiply-adds: on a 40x20x20 hex grid after localized solves (rho = 5 fine rings, C̃ with
-/// 22M entries, A^1 36% dense, 2 threads) A^1 took 6.6 s and 1.4 GB peak, against 17.9 s and
-/// 2.2 GB for column-by-column Gustavson products, which stream C̃ from memory once per
-/// column of the result and hold X M^T.
+/// nearby supports, e.g. node_blocks of the coarse level. Unless M is at least half dense (then
+/// the product is dense, in parallel), each group J of at most kMaxGroup rows is done at once: (X
+/// M^T)[:, J] is accumulated densely over the union of the supports of M's rows J, then M (X
+/// M^T)[:, J]. Every column of M is read once per group instead of once per row of M, and the inner
+/// loops are dense |J|-wide multiply-adds: on a 40x20x20 hex grid after localized solves (rho = 5
+/// fine rings, C̃ with 22M entries, A^1 36% dense, 2 threads) A^1 took 6.6 s and 1.4 GB peak,
+/// against 17.9 s and 2.2 GB for column-by-column Gustavson products, which stream C̃ from memory
+/// once per column of the result and hold X M^T.
 SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
                         const std::vector<IndexVector>& groups);
 

@@ -469,3 +469,21 @@ TEST(SpdSolver, NodeOrderingFallsBackWithoutNodeBlocks) {
     const Vector x = ldlt.solve(b);
     EXPECT_LT((solver.solve(b) - x).norm(), 1e-10 * x.norm());
 }
+
+// A dense matrix (the coarse operator of a global hierarchy) keeps its own order, and solves
+// like a dense Cholesky (1e-10: condition number below 10).
+TEST(SpdSolver, DenseMatricesKeepTheirOrder) {
+    const Matrix X = random_matrix(300, 300, 24);
+    const Matrix D = X * X.transpose() + 300 * Matrix::Identity(300, 300);
+    SparseMatrix A = D.sparseView();
+    A.makeCompressed();
+    solve::SpdSolver solver;
+    solver.compute(A);
+    EXPECT_EQ(solver.factor_stats().ordering, "natural");
+    const Vector b = random_matrix(300, 1, 25).col(0);
+    const Vector x = D.llt().solve(b);
+    EXPECT_LT((solver.solve(b) - x).norm(), 1e-10 * x.norm());
+    // A sparse one is still ordered.
+    solver.compute(shifted(grid_laplacian(10, 3, 0.0, 22), 0.1));
+    EXPECT_NE(solver.factor_stats().ordering, "natural");
+}
