@@ -214,11 +214,58 @@ void accumulate(const SparseMatrix& S, RowAccumulator<W>& rows, RowAccumulator<W
     }
 }
 
-/// The lower triangle of M X M^T (Mt = M^T), group by group of kernel width W (see congruence).
+/// The symmetric matrix whose column j has, on and below the diagonal, rows[j] (sorted, all
+/// >= j) and values[j]; the upper triangle is their mirror image. Built in place (one count
+/// pass), without a transposed copy; empties rows and values column by column.
+SparseMatrix symmetric_from_lower_columns(std::vector<std::vector<Index>>& rows,
+                                          std::vector<std::vector<double>>& values) {
+    const Index m = static_cast<Index>(rows.size());
+    std::vector<Index> above(static_cast<std::size_t>(m), 0);  // entries above the diagonal
+    std::size_t nnz = 0;
+    for (Index j = 0; j < m; ++j)
+        for (const Index r : rows[static_cast<std::size_t>(j)]) {
+            ++nnz;
+            if (r > j) {
+                ++above[static_cast<std::size_t>(r)];
+                ++nnz;
+            }
+        }
+    SparseMatrix S(m, m);
+    S.resizeNonZeros(static_cast<Index>(nnz));
+    Index* outer = S.outerIndexPtr();
+    Index* inner = S.innerIndexPtr();
+    double* value = S.valuePtr();
+    outer[0] = 0;
+    for (Index j = 0; j < m; ++j)
+        outer[j + 1] = outer[j] + above[static_cast<std::size_t>(j)] +
+                       static_cast<Index>(rows[static_cast<std::size_t>(j)].size());
+    // Column j: its entries above the diagonal (rows i < j, from the lower columns i, met in
+    // increasing i), then its own lower column.
+    std::vector<Index> next(outer, outer + m);
+    for (Index j = 0; j < m; ++j) {
+        auto& r = rows[static_cast<std::size_t>(j)];
+        auto& v = values[static_cast<std::size_t>(j)];
+        Index k = outer[j + 1] - static_cast<Index>(r.size());
+        for (std::size_t e = 0; e < r.size(); ++e, ++k) {
+            inner[k] = r[e];
+            value[k] = v[e];
+            if (r[e] > j) {
+                Index& t = next[static_cast<std::size_t>(r[e])];
+                inner[t] = j;
+                value[t++] = v[e];
+            }
+        }
+        std::vector<Index>().swap(r);
+        std::vector<double>().swap(v);
+    }
+    return S;
+}
+
+/// M X M^T (Mt = M^T): its lower triangle group by group of kernel width W (see congruence),
+/// mirrored.
 template <int W>
-SparseMatrix grouped_lower_congruence(const SparseMatrix& M, const SparseMatrix& Mt,
-                                      const SparseMatrix& X,
-                                      const std::vector<IndexVector>& groups) {
+SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& Mt,
+                                const SparseMatrix& X, const std::vector<IndexVector>& groups) {
     const Index m = M.rows(), n = M.cols();
     std::vector<std::vector<Index>> rows(static_cast<std::size_t>(m));
     std::vector<std::vector<double>> values(static_cast<std::size_t>(m));
@@ -253,17 +300,7 @@ SparseMatrix grouped_lower_congruence(const SparseMatrix& M, const SparseMatrix&
             result.clear();
         }
     }
-    return from_columns(m, m, rows, values);
-}
-
-/// Lower triangle L of a symmetric matrix -> the matrix (L + L^T, diagonal once).
-SparseMatrix mirrored(const SparseMatrix& L) {
-    SparseMatrix S = L + SparseMatrix(L.transpose());
-    S.makeCompressed();
-    for (Index j = 0; j < S.outerSize(); ++j)
-        for (SparseMatrix::InnerIterator it(S, j); it; ++it)
-            if (it.row() == j) it.valueRef() *= 0.5;
-    return S;
+    return symmetric_from_lower_columns(rows, values);
 }
 
 }  // namespace
@@ -292,10 +329,10 @@ SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
     if (dense_product_fits(M, Mt) &&
         static_cast<double>(M.nonZeros()) >= kDenseCongruence * entries(M))
         return dense_lower_product(M, product(X, Mt));
-    if (widest <= 8) return mirrored(grouped_lower_congruence<8>(M, Mt, X, groups));
-    if (widest <= 16) return mirrored(grouped_lower_congruence<16>(M, Mt, X, groups));
-    if (widest <= 24) return mirrored(grouped_lower_congruence<24>(M, Mt, X, groups));
-    return mirrored(grouped_lower_congruence<kMaxGroup>(M, Mt, X, groups));
+    if (widest <= 8) return grouped_congruence<8>(M, Mt, X, groups);
+    if (widest <= 16) return grouped_congruence<16>(M, Mt, X, groups);
+    if (widest <= 24) return grouped_congruence<24>(M, Mt, X, groups);
+    return grouped_congruence<kMaxGroup>(M, Mt, X, groups);
 }
 
 std::vector<IndexVector> node_blocks(const IndexVector& dofs, const Eigen::Vector3i& cells, int dim,
