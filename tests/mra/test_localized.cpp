@@ -18,6 +18,14 @@ std::string param_name(const ::testing::TestParamInfo<LocalizedParam>& p) {
     return std::to_string(std::get<0>(p.param)) + "D_" + refinement_name(std::get<1>(p.param));
 }
 
+/// C̃^k of two hierarchies agree entry by entry on every level to `tol`.
+void expect_same_refinements(const Hierarchy& a, const Hierarchy& b, double tol) {
+    for (int k = 1; k < a.num_levels(); ++k) {
+        const Matrix dC = Matrix(a.level(k).C_adapted - b.level(k).C_adapted);
+        EXPECT_LT(dC.cwiseAbs().maxCoeff(), tol) << "level " << k;
+    }
+}
+
 class MraLocalized : public ::testing::TestWithParam<LocalizedParam> {
   protected:
     int dim() const { return std::get<0>(GetParam()); }
@@ -284,12 +292,8 @@ TEST_P(MraLocalized, DefectDrivenRadiusBelowRoundOffGrowsToTheGlobalSolves) {
     o.radius = {1};
     o.defect_tolerance = 1e-300;
     o.max_radius = 64;
-    const Hierarchy hg = build_hierarchy(p.mesh, p.K, p.bc.dofs, global);
-    const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
-    for (int k = 1; k < h.num_levels(); ++k) {
-        const Matrix dC = Matrix(hg.level(k).C_adapted - h.level(k).C_adapted);
-        EXPECT_LT(dC.cwiseAbs().maxCoeff(), 1e-10) << "level " << k;
-    }
+    expect_same_refinements(build_hierarchy(p.mesh, p.K, p.bc.dofs, global),
+                            build_hierarchy(p.mesh, p.K, p.bc.dofs, o), 1e-10);
     // Invalid settings are refused.
     o.defect_tolerance = -1;
     EXPECT_THROW(build_hierarchy(p.mesh, p.K, p.bc.dofs, o), Error);
@@ -372,12 +376,8 @@ TEST_P(MraLocalized, PatchCoveringTheGridEqualsGlobalSolves) {
     Options local = global;
     local.radius = {1};
     local.patch = 5;
-    const Hierarchy hg = build_hierarchy(p.mesh, p.K, p.bc.dofs, global);
-    const Hierarchy hl = build_hierarchy(p.mesh, p.K, p.bc.dofs, local);
-    for (int k = 1; k < hg.num_levels(); ++k) {
-        const Matrix dC = Matrix(hg.level(k).C_adapted - hl.level(k).C_adapted);
-        EXPECT_LT(dC.cwiseAbs().maxCoeff(), 1e-10) << "level " << k;
-    }
+    expect_same_refinements(build_hierarchy(p.mesh, p.K, p.bc.dofs, global),
+                            build_hierarchy(p.mesh, p.K, p.bc.dofs, local), 1e-10);
 }
 
 TEST_P(MraLocalized, BasesOnDemandEqualTheStoredOnes) {
