@@ -9,7 +9,9 @@
 // scene "checker": the grid spans [0, NX/NY] x [0, 1] x [0, NZ/NY] (cubic cells), hung from its
 // face y = 1 under gravity and a traction on y = 0, with the checker inclusions of the hierarchy
 // tests (contrast 1000). Otherwise a scene file (e.g. examples/accordion/accordion.json) whose
-// grid is given NX x NY x NZ cells. Times are wall seconds on a shared 2-core machine.
+// grid is given NX x NY x NZ cells. Times are wall seconds on a shared 2-core machine. The
+// build's peak is the process high-water mark from the start of the build (the fine problem's
+// memory included, its reference solve not).
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -57,6 +59,9 @@ double peak_mb() {
     }
     return 0;
 }
+
+/// Starts a new high-water mark for peak_mb (Linux: 5 > /proc/self/clear_refs).
+void reset_peak() { std::ofstream("/proc/self/clear_refs") << "5"; }
 
 /// The fine problem: the checker bench problem or a scene file with the given grid cells.
 cg::test::GridProblem make_problem(const Eigen::Vector3i& cells, const std::string& scene) {
@@ -120,6 +125,8 @@ int main(int argc, char** argv) {
         o.levels, cg::mra::refinement_name(o.refinement).c_str(), radius.c_str(),
         cg::mra::radius_grid_name(o.radius_grid).c_str(), o.patch, o.truncation,
         static_cast<int>(o.invariance));
+    std::fflush(stdout);
+    reset_peak();
     t0 = std::chrono::steady_clock::now();
     const cg::mra::Hierarchy h = cg::mra::build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
     const double build = since(t0);
@@ -138,6 +145,7 @@ int main(int argc, char** argv) {
                 static_cast<double>(bytes) / 1e6, peak_mb());
     for (const auto& [phase, s] : h.timings.entries())
         std::printf("  %-40s %8.3f s\n", phase.c_str(), s);
+    std::fflush(stdout);
 
     cg::Vector g(h.fine_dofs.size());
     for (cg::Index i = 0; i < g.size(); ++i) g[i] = p.f[h.fine_dofs[i]];
