@@ -219,19 +219,25 @@
 /// 2x2x2 coarse nodes (detail::congruence), symbolic analyses reused across regions of the
 /// same shape (regions sorted by shape; B keeps its structural pattern, or cancellations that
 /// depend on the material would give regions of one shape different patterns), B[S, S] built
-/// in place. Peak = the bench's high-water mark (fine problem and its solve included).
+/// in place, Z built row by row instead of from triplets, A^k assembled symmetric in place.
+/// Peak = the bench's high-water mark (fine problem and its solve included; (c) patch 2 was
+/// measured before the last two changes, which took patch 1 from 1393 to 1261 MB).
 ///
 /// | patch | row | build s | solves s | A^1 s | storage MB | peak MB | coarsest error |
 /// |-------|-----|---------|----------|-------|------------|---------|----------------|
 /// | 1     | (a) | 182     | 158      | 20.4  | 610        | 2023    | 0.58           |
 /// | 1     | (b) | 68.7    | 49.3     | 15.5  | 610        | 2117    | 0.58           |
-/// | 1     | (c) | 39.1    | 30.0     | 5.9   | 611        | 1393    | 0.58           |
+/// | 1     | (c) | 39.1    | 30.0     | 5.9   | 611        | 1261    | 0.58           |
 /// | 2     | (b) | 52.6    | 17.0     | 30.5  | 769        | 2820    | 0.48           |
 /// | 2     | (c) | 22.0    | 10.2     | 7.7   | 771        | 1848    | 0.48           |
 ///
 /// Growth with the grid (same setting, patch 1, (c); nodes: build s, storage MB): 1,377: 1.9,
 /// 22; 4,225: 9.6, 101; 9,537: 19.7, 284; 18,081: 39.7, 611. From 4,225 to 18,081 nodes (4.3x)
 /// the build grows 4.1x, close to linear (small grids clip most regions at the boundary).
+/// 64^3 cells (274,625 nodes), two levels, rho = 2 fine rings: build 298.6 s (local solves
+/// 207 s, A^1 36 s, B 26 s), storage 5.2 GB (C̃ 1.1e8 entries, A^1 1.9e8, B 1.3e8), peak
+/// 10.3 GB from the start of the build, ~4.6 GB of it the bench's fine problem. At rho = 5,
+/// A^1 alone would need ~8.5 GB.
 /// Where the time goes at patch 1 (perf): the 2,541 local CHOLMOD factorizations (~3,500
 /// unknowns, 2e8 flops each): numeric 40% of the solves, CHOLMOD's permuted transpose of the
 /// input 25%, the symbolic analyses left (regions of new shapes) 15%, the input checks and
