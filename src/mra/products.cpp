@@ -126,13 +126,13 @@ constexpr double kDenseCongruence = 0.5;
 /// Columns per block of the dense products.
 constexpr Index kDenseBlock = 128;
 
-/// X Y dense, block columns in parallel (OpenMP; Eigen's own products run on one thread here).
-/// Exact zeros are not stored.
+/// X Y dense, block columns in parallel (OpenMP; Eigen's own products run on one thread here;
+/// a single block stays on the calling thread). Exact zeros are not stored.
 SparseMatrix dense_product(const SparseMatrix& X, const SparseMatrix& Y) {
     const Matrix Xd(X), Yd(Y);
     const Index n = Yd.cols();
     Matrix P(Xd.rows(), n);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (n > kDenseBlock)
     for (Index b = 0; b < n; b += kDenseBlock) {
         const Index nb = std::min(kDenseBlock, n - b);
         P.middleCols(b, nb).noalias() = Xd * Yd.middleCols(b, nb);
@@ -149,7 +149,7 @@ SparseMatrix dense_lower_product(const SparseMatrix& M, const SparseMatrix& Y) {
     const Matrix Md(M), Yd(Y);
     const Index m = Md.rows();
     Matrix P(m, m);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (m > kDenseBlock)
     for (Index b = 0; b < m; b += kDenseBlock) {
         const Index nb = std::min(kDenseBlock, m - b);
         P.block(b, b, m - b, nb).noalias() = Md.bottomRows(m - b) * Yd.middleCols(b, nb);
