@@ -439,15 +439,17 @@ void SpdSolver::analyze(const SparseMatrix& A) {
     switch (s.options.backend) {
         case Backend::Cholmod: {
             s.cholmod = std::make_unique<CholmodFactor>();
-            const std::vector<Index> start = column_groups(A, s.options.node_dofs);
             std::string ordering;
-            if (static_cast<Index>(start.size()) - 1 < s.n) {
+            if (is_dense(A)) {
+                s.cholmod->use_natural_order();
+                s.cholmod->analyzePattern(A);
+            } else if (const std::vector<Index> start = column_groups(A, s.options.node_dofs);
+                       static_cast<Index>(start.size()) - 1 < s.n) {
                 auto [perm, name] = group_ordering(A, start);
                 s.cholmod->analyze_permuted(A, perm);
                 ordering = std::move(name);
             } else {
                 if (s.options.amd_only) s.cholmod->use_amd_only();
-                if (is_dense(A)) s.cholmod->use_natural_order();
                 s.cholmod->analyzePattern(A);  // no node blocks: CHOLMOD's default ordering
             }
             CG_VERIFY(s.cholmod->has_factor() && s.cholmod->status() >= 0,

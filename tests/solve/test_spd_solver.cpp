@@ -483,6 +483,14 @@ TEST(SpdSolver, DenseMatricesKeepTheirOrder) {
     const Vector b = random_matrix(300, 1, 25).col(0);
     const Vector x = D.llt().solve(b);
     EXPECT_LT((solver.solve(b) - x).norm(), 1e-10 * x.norm());
+    // Also when its columns come in node blocks (every column of a dense matrix has the same
+    // pattern).
+    solve::SolverOptions nodes;
+    nodes.node_dofs = 3;
+    solve::SpdSolver node_solver(nodes);
+    node_solver.compute(A);
+    EXPECT_EQ(node_solver.factor_stats().ordering, "natural");
+    EXPECT_LT((node_solver.solve(b) - x).norm(), 1e-10 * x.norm());
     // A sparse one is still ordered.
     solver.compute(shifted(grid_laplacian(10, 3, 0.0, 22), 0.1));
     EXPECT_NE(solver.factor_stats().ordering, "natural");

@@ -28,7 +28,8 @@ struct SolverOptions {
     /// the smaller factor), then expands each node to its unknowns. A node is a run of at most
     /// node_dofs consecutive columns with identical patterns, so nodes with components removed
     /// by Dirichlet conditions are fine. If A has no such runs (or node_dofs = 1) CHOLMOD's
-    /// default ordering is used: AMD, then METIS on A itself when AMD's fill is large.
+    /// default ordering is used: AMD, then METIS on A itself when AMD's fill is large. Matrices
+    /// with over 90% of their entries stored keep their own order, whatever the options.
     int node_dofs = 1;
     /// cholmod without node blocks: order with AMD alone instead of CHOLMOD's default (AMD, then
     /// METIS if AMD's fill is large). For many small systems, where METIS costs more than its
