@@ -227,6 +227,11 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     const double unit = h.spacing.head(dim).maxCoeff();
     Matrix rig_next = detail::fine_rigid_modes(dim, cells, h.spacing, unit, h.fine_dofs);
 
+    // Rings of the finer grid of a step in a finite radius (an infinite max_radius: 1e6).
+    const auto to_rings = [&](double radius) {
+        return static_cast<int>(std::min(std::floor(radius), 1e6)) *
+               (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
+    };
     h.levels.resize(static_cast<std::size_t>(q - 1));
     const SparseMatrix* A_next = &h.A_fine;
     IndexVector dofs_next = h.fine_dofs;
@@ -286,10 +291,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             if (!by_cell || std::isinf(L.radius))
                 R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
         }
-        const int rings = std::isinf(L.radius)
-                              ? 0
-                              : static_cast<int>(std::floor(L.radius)) *
-                                    (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
+        const int rings = std::isinf(L.radius) ? 0 : to_rings(L.radius);
         if (std::isinf(L.radius)) {
             const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
             L.C_adapted =
@@ -303,11 +305,9 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                     detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells), g, rings);
             } else {
                 const Phase phase(tag + "Z (localized solves)", &h.timings);
-                const int per_radius = options.radius_grid == RadiusGrid::Coarse ? 2 : 1;
                 detail::LocalizationRings lr;
                 lr.start = rings;
-                lr.max = std::max(rings, static_cast<int>(std::min(
-                                             std::floor(options.max_radius) * per_radius, 1e6)));
+                lr.max = std::max(rings, to_rings(options.max_radius));
                 lr.defect_tolerance = options.defect_tolerance;
                 detail::LocalizedZ lz = detail::localized_z(L.B, R, L.W, g, lr, options.patch);
                 Z = std::move(lz.Z);
