@@ -17,6 +17,13 @@
 
 #include "coarsegrain/common/error.hpp"
 
+// LAPACK's dense Cholesky factorization and solve (Fortran ABI: OpenBLAS's LAPACK through
+// Debian's liblapack.so.3 alternative). The trailing arguments are the hidden lengths of the
+// character arguments.
+extern "C" {
+void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t);
+}
+
 namespace coarsegrain::solve {
 
 namespace {
@@ -84,12 +91,6 @@ class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
     void use_amd_only() {
         cholmod().nmethods = 1;
         cholmod().method[0].ordering = CHOLMOD_AMD;
-    }
-    /// The next analyzePattern keeps the given order (for dense matrices, which no ordering
-    /// helps).
-    void use_natural_order() {
-        cholmod().nmethods = 1;
-        cholmod().method[0].ordering = CHOLMOD_NATURAL;
     }
     bool has_factor() const { return m_cholmodFactor != nullptr; }
     /// Column at which the factorization stopped (n on success).
@@ -203,6 +204,35 @@ std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
     return {std::move(perm), "node-" + name};
 }
 
+// CHOLMOD's supernodal kernels call BLAS (dpotrf, dsyrk, dgemm, dtrsm on the supernodes), where
+// most of a large factorization's time goes. Debian's OpenBLAS (libopenblas0-pthread) runs its
+// own thread pool, which by default would use every core even with --threads 1; so before each
+// factorization its thread count is set to OpenMP's (omp_get_max_threads: --threads or
+// OMP_NUM_THREADS, else all cores), unless the user set OPENBLAS_NUM_THREADS. The two pools take
+// turns: no OpenMP region runs inside a factorization, and idle OpenBLAS threads spin for at
+// most about 0.1 s (2^28 cycles, OpenBLAS's default) before sleeping.
+// On an idle 2-core machine, 2 threads took the factorize phase of bench/ccx_vs_coarsegrain.py's
+// problem from 3.93 s to 2.56 s (an earlier measurement on the 56K-DOF demo found one thread as
+// fast: 2.0 s against 2.0-2.2 s). OpenBLAS threads spin while they wait for work, and each BLAS
+// call waits for its slowest thread: on a machine whose cores are busy with other jobs 2 threads
+// are slower than one (that factorization, load average 6 on 2 cores: median 4.3 s against
+// 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s against 4.7 s), so such
+// runs should pass --threads 1. The OpenMP build of OpenBLAS (libopenblas0-openmp, which would
+// share coarsegrain's OpenMP pool) is not a cure: under the same load its 2-thread
+// factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads build. Other
+// BLAS libraries (no openblas_set_num_threads symbol) are left alone. Inside an OpenMP parallel
+// region (the hierarchy's localized solves: one factorization per thread) BLAS gets one thread:
+// with OpenMP's count, the 2 threads' concurrent factorizations each woke both OpenBLAS threads
+// (24x12x12 hex checker, rho = 5, 2 threads: localized solves 25.6 s, 18.5 s with one).
+void match_blas_threads() {
+    static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
+    if (user_set) return;
+    using SetThreads = void (*)(int);
+    static const auto set =
+        reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    if (set) set(omp_in_parallel() ? 1 : omp_get_max_threads());
+}
+
 using Ldlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>>;
 using Cg = Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper,
                                     Eigen::DiagonalPreconditioner<double>>;
@@ -213,10 +243,14 @@ using Cg = Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper,
 constexpr Index kParallelNonzeros = 200000;
 
 // Matrices with more than this fraction of their entries stored are factorized in their own
-// order: a fill-reducing ordering can save little on them and costs a large part of the
-// factorization (analysis of a dense 3000 x 3000 matrix: 0.37 s with AMD, 0.15-0.2 s without,
-// against 0.5-0.6 s for the factorization; the coarse operators of global hierarchies are
-// dense).
+// order, as dense matrices (LAPACK dpotrf): a fill-reducing ordering can save little on them and
+// costs a large part of the factorization (analysis of a dense 3000 x 3000 matrix: 0.37 s with
+// AMD, 0.15-0.2 s without, against 0.5-0.6 s for the factorization; the coarse operators of
+// global hierarchies are dense), and CHOLMOD's own work on a small dense matrix (symbolic
+// analysis, permuted transposes, supernode bookkeeping) costs several times its flops. Measured
+// on the coarsest operators of 3-level hierarchies (bench_mra, 2 threads): the 243-DOF one of
+// the 32x8x8 beam took 1.6-2.4 ms through CHOLMOD and 0.38-0.50 ms here (dpotrf alone:
+// 0.27-0.30 ms); the 1188-DOF one of 40x20x20 about 28 ms against 14-17 ms (dpotrf: 10 ms).
 constexpr double kDenseFraction = 0.9;
 
 bool is_dense(const SparseMatrix& A) {
@@ -296,6 +330,31 @@ void check_values(const SparseMatrix& A, const std::string& where) {
               where, rel, kSymmetryTolerance);
 }
 
+// check_values for a dense copy D of the matrix, in tiles of kTile x kTile entries so that D's
+// columns and rows are both read from cache (the sparse check's column cursors took longer than
+// LAPACK's factorization of a dense 1188 x 1188 coarse operator).
+void check_dense_values(const Matrix& D, const std::string& where) {
+    constexpr Index kTile = 64;
+    const Index n = static_cast<Index>(D.rows());
+    for (Index j = 0; j < n; ++j)
+        CG_VERIFY(D.col(j).allFinite(),
+                  "{}: the matrix has a non-finite value (NaN or inf) in column {}", where, j);
+    double asym2 = 0;
+    for (Index j0 = 0; j0 < n; j0 += kTile)
+        for (Index i0 = j0; i0 < n; i0 += kTile) {
+            const Index rows = std::min(kTile, n - i0), cols = std::min(kTile, n - j0);
+            asym2 += (D.block(i0, j0, rows, cols) - D.block(j0, i0, cols, rows).transpose())
+                         .squaredNorm() *
+                     (i0 == j0 ? 1 : 2);
+        }
+    const double norm2 = D.squaredNorm();
+    const double rel = norm2 > 0 ? std::sqrt(asym2 / norm2) : 0.0;
+    CG_VERIFY(rel <= kSymmetryTolerance,
+              "{}: the matrix is not symmetric: ||A - A^T|| / ||A|| = {:.3g} exceeds {:.0e} (both "
+              "triangles must be stored)",
+              where, rel, kSymmetryTolerance);
+}
+
 }  // namespace
 
 std::string backend_name(Backend b) {
@@ -326,6 +385,10 @@ struct SpdSolver::Impl {
     bool factorized = false;
     FactorStats stats;
     std::unique_ptr<CholmodFactor> cholmod;
+    /// Cholmod backend on a dense matrix (is_dense): its lower Cholesky factor from LAPACK,
+    /// in place of CHOLMOD's.
+    bool dense = false;
+    Matrix dense_factor;
     std::unique_ptr<Ldlt> ldlt;
     std::unique_ptr<Cg> cg;
     SparseMatrix cg_matrix;  // CG keeps a reference to its matrix, so it gets its own copy
@@ -341,13 +404,39 @@ struct SpdSolver::Impl {
     Matrix solve_factored(const Matrix& b) const {
         switch (options.backend) {
             case Backend::Cholmod:
-                return cholmod->solve(b);
+                return dense ? solve_dense(b) : Matrix(cholmod->solve(b));
             case Backend::SimplicialLDLT:
                 return ldlt->solve(b);
             case Backend::ConjugateGradient:
                 break;
         }
         return {};
+    }
+
+    /// Factorizes a dense A (both triangles stored) with LAPACK: dense_factor = L, A = L L^T.
+    void factorize_dense(const SparseMatrix& A) {
+        dense_factor = A;
+        check_dense_values(dense_factor, fmt::format("solver ({})", name()));
+        const int size = static_cast<int>(n);
+        int info = 0;
+        match_blas_threads();
+        dpotrf_("L", &size, dense_factor.data(), &size, &info, 1);
+        CG_VERIFY(info >= 0, "solver (cholmod): LAPACK dpotrf rejected argument {}", -info);
+        if (info > 0) {
+            not_positive_definite(fmt::format(
+                "LAPACK dpotrf: the leading minor of order {} is not positive definite", info));
+        }
+        const auto d = dense_factor.diagonal();
+        const double ratio = std::pow(d.minCoeff() / d.maxCoeff(), 2);
+        if (!(ratio >= kSuspectPivotRatio)) check_numerically_singular(A, ratio);
+    }
+
+    Matrix solve_dense(const Matrix& b) const {
+        Matrix x = b;
+        const auto L = dense_factor.triangularView<Eigen::Lower>();
+        L.solveInPlace(x);
+        L.transpose().solveInPlace(x);
+        return x;
     }
 
     // Called when the pivot ratio is suspicious: two steps of inverse iteration from a fixed
@@ -378,39 +467,6 @@ struct SpdSolver::Impl {
     }
 };
 
-namespace {
-
-// CHOLMOD's supernodal kernels call BLAS (dpotrf, dsyrk, dgemm, dtrsm on the supernodes), where
-// most of a large factorization's time goes. Debian's OpenBLAS (libopenblas0-pthread) runs its
-// own thread pool, which by default would use every core even with --threads 1; so before each
-// factorization its thread count is set to OpenMP's (omp_get_max_threads: --threads or
-// OMP_NUM_THREADS, else all cores), unless the user set OPENBLAS_NUM_THREADS. The two pools take
-// turns: no OpenMP region runs inside a factorization, and idle OpenBLAS threads spin for at
-// most about 0.1 s (2^28 cycles, OpenBLAS's default) before sleeping.
-// On an idle 2-core machine, 2 threads took the factorize phase of bench/ccx_vs_coarsegrain.py's
-// problem from 3.93 s to 2.56 s (an earlier measurement on the 56K-DOF demo found one thread as
-// fast: 2.0 s against 2.0-2.2 s). OpenBLAS threads spin while they wait for work, and each BLAS
-// call waits for its slowest thread: on a machine whose cores are busy with other jobs 2 threads
-// are slower than one (that factorization, load average 6 on 2 cores: median 4.3 s against
-// 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s against 4.7 s), so such
-// runs should pass --threads 1. The OpenMP build of OpenBLAS (libopenblas0-openmp, which would
-// share coarsegrain's OpenMP pool) is not a cure: under the same load its 2-thread
-// factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads build. Other
-// BLAS libraries (no openblas_set_num_threads symbol) are left alone. Inside an OpenMP parallel
-// region (the hierarchy's localized solves: one factorization per thread) BLAS gets one thread:
-// with OpenMP's count, the 2 threads' concurrent factorizations each woke both OpenBLAS threads
-// (24x12x12 hex checker, rho = 5, 2 threads: localized solves 25.6 s, 18.5 s with one).
-void match_blas_threads() {
-    static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
-    if (user_set) return;
-    using SetThreads = void (*)(int);
-    static const auto set =
-        reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
-    if (set) set(omp_in_parallel() ? 1 : omp_get_max_threads());
-}
-
-}  // namespace
-
 SpdSolver::SpdSolver(SolverOptions options) : m_impl(std::make_unique<Impl>()) {
     CG_VERIFY(options.cg_tolerance > 0 && options.cg_tolerance < 1,
               "solver: cg_tolerance = {} must be in (0, 1)", options.cg_tolerance);
@@ -435,16 +491,21 @@ void SpdSolver::analyze(const SparseMatrix& A) {
     s.analyzed = s.factorized = false;
     s.n = static_cast<Index>(A.rows());
     s.nnz = A.nonZeros();
-    s.pattern = pattern_hash(A);
+    s.dense = s.options.backend == Backend::Cholmod && is_dense(A);
+    s.pattern = s.dense ? 0 : pattern_hash(A);
     switch (s.options.backend) {
         case Backend::Cholmod: {
+            s.dense_factor.resize(0, 0);
+            if (s.dense) {
+                s.cholmod.reset();
+                const double n = static_cast<double>(s.n);
+                s.stats = {"natural", n * (n + 1) / 2, n * n * n / 3};
+                break;
+            }
             s.cholmod = std::make_unique<CholmodFactor>();
             std::string ordering;
-            if (is_dense(A)) {
-                s.cholmod->use_natural_order();
-                s.cholmod->analyzePattern(A);
-            } else if (const std::vector<Index> start = column_groups(A, s.options.node_dofs);
-                       static_cast<Index>(start.size()) - 1 < s.n) {
+            if (const std::vector<Index> start = column_groups(A, s.options.node_dofs);
+                static_cast<Index>(start.size()) - 1 < s.n) {
                 auto [perm, name] = group_ordering(A, start);
                 s.cholmod->analyze_permuted(A, perm);
                 ordering = std::move(name);
@@ -473,9 +534,10 @@ void SpdSolver::analyze(const SparseMatrix& A) {
 
 void SpdSolver::factorize(const SparseMatrix& A) {
     Impl& s = *m_impl;
-    const bool same_pattern = s.analyzed && A.rows() == s.n && A.cols() == s.n &&
-                              A.nonZeros() == s.nnz && A.isCompressed() &&
-                              pattern_hash(A) == s.pattern;
+    // A dense matrix has no pattern to analyze: its order is kept whatever its zeros.
+    const bool same_pattern =
+        s.analyzed && A.rows() == s.n && A.cols() == s.n && A.isCompressed() &&
+        (s.dense ? is_dense(A) : A.nonZeros() == s.nnz && pattern_hash(A) == s.pattern);
     if (!same_pattern) analyze(A);
     factorize_analyzed(A);
 }
@@ -483,10 +545,14 @@ void SpdSolver::factorize(const SparseMatrix& A) {
 void SpdSolver::factorize_analyzed(const SparseMatrix& A) {
     Impl& s = *m_impl;
     s.factorized = false;
-    check_values(A, fmt::format("solver ({})", s.name()));
+    if (!s.dense) check_values(A, fmt::format("solver ({})", s.name()));
 
     switch (s.options.backend) {
         case Backend::Cholmod: {
+            if (s.dense) {
+                s.factorize_dense(A);
+                break;
+            }
             CholmodFactor& f = *s.cholmod;
             match_blas_threads();
             f.factorize(A);
@@ -564,10 +630,11 @@ Matrix SpdSolver::solve(const Matrix& b) const {
         }
     } else {
         x = s.solve_factored(b);
-        CG_VERIFY(s.options.backend != Backend::Cholmod || s.cholmod->info() == Eigen::Success,
-                  "solver (cholmod): the triangular solves failed (n = {}, CHOLMOD status {}; out "
-                  "of memory?)",
-                  s.n, s.cholmod->status());
+        CG_VERIFY(
+            s.options.backend != Backend::Cholmod || s.dense || s.cholmod->info() == Eigen::Success,
+            "solver (cholmod): the triangular solves failed (n = {}, CHOLMOD status {}; out "
+            "of memory?)",
+            s.n, s.cholmod->status());
     }
     CG_VERIFY(x.allFinite(), "solver ({}): the solution has non-finite values (n = {})", s.name(),
               s.n);
@@ -589,7 +656,8 @@ IndexVector SpdSolver::permutation() const {
     const Impl& s = *m_impl;
     CG_VERIFY(s.analyzed && s.options.backend == Backend::Cholmod,
               "solver ({}): permutation needs an analyzed cholmod solver", s.name());
-    return s.cholmod->permutation();
+    return s.dense ? IndexVector(IndexVector::LinSpaced(s.n, 0, s.n - 1))
+                   : s.cholmod->permutation();
 }
 
 Index SpdSolver::rows() const { return m_impl->analyzed ? m_impl->n : 0; }

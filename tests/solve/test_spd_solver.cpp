@@ -495,3 +495,41 @@ TEST(SpdSolver, DenseMatricesKeepTheirOrder) {
     solver.compute(shifted(grid_laplacian(10, 3, 0.0, 22), 0.1));
     EXPECT_NE(solver.factor_stats().ordering, "natural");
 }
+
+// Dense matrices (factorized by LAPACK's dpotrf, not by CHOLMOD) are checked like sparse ones:
+// asymmetric and non-finite values are input errors; indefinite and singular matrices (also
+// scaled by 1e-8 and 1e8: the checks are relative) are not positive definite; a new
+// factorization replaces the old one (D and 2 D: solutions 1e-10 apart relative to each other,
+// condition number below 10).
+TEST(SpdSolver, DenseMatricesAreCheckedLikeSparseOnes) {
+    const Index n = 60;
+    const auto sparse = [](const Matrix& M) {
+        SparseMatrix S = M.sparseView();
+        S.makeCompressed();
+        return S;
+    };
+    const Matrix X = random_matrix(n, n, 26);
+    const Matrix D = X * X.transpose() + static_cast<double>(n) * Matrix::Identity(n, n);
+    Matrix asym = D;
+    asym(3, 2) += 1e-3 * D.norm();
+    Matrix nan = D;
+    nan(5, 5) = std::nan("");
+    Matrix inf = D;
+    inf(4, 3) = inf(3, 4) = INFINITY;
+    for (const Matrix* bad : {&asym, &nan, &inf})
+        expect_input_error(Backend::Cholmod, sparse(*bad));
+    const double largest = Eigen::SelfAdjointEigenSolver<Matrix>(D).eigenvalues().maxCoeff();
+    expect_not_positive_definite(Backend::Cholmod,
+                                 sparse(D - 0.5 * largest * Matrix::Identity(n, n)));
+    const Matrix Y = random_matrix(n, n - 1, 27);
+    for (double scale : {1e-8, 1.0, 1e8})
+        expect_not_positive_definite(Backend::Cholmod, sparse(scale * Y * Y.transpose()));
+    solve::SpdSolver solver;
+    const Vector b = random_matrix(n, 1, 28).col(0);
+    solver.factorize(sparse(D));
+    const Vector x = solver.solve(b);
+    EXPECT_LT((D * x - b).norm(), 1e-12 * b.norm());
+    solver.factorize(sparse(2 * D));
+    EXPECT_LT((2 * solver.solve(b) - x).norm(), 1e-10 * x.norm());
+    EXPECT_TRUE(is_permutation_of_range(solver.permutation(), n));
+}

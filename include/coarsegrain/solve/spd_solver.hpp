@@ -66,7 +66,10 @@ struct FactorStats {
 /// iteration count and residual).
 ///
 /// Not thread-safe: one solve at a time (CHOLMOD's workspace is shared). CHOLMOD uses its
-/// supernodal factorization with BLAS/OpenMP threads as configured.
+/// supernodal factorization with BLAS/OpenMP threads as configured. The cholmod backend hands
+/// matrices with over 90% of their entries stored (the coarse operators of the hierarchy) to
+/// LAPACK's dense Cholesky (dpotrf) instead, with the same checks: CHOLMOD's symbolic work
+/// costs more than the factorization on them.
 class SpdSolver {
   public:
     /// @throws Error if cg_tolerance is not in (0, 1) or cg_max_iterations < 0
