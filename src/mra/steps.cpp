@@ -1,4 +1,3 @@
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -29,18 +28,19 @@ constexpr Index kMinParallelNodes = 64;
 constexpr Index kMinParallelColumns = 4096;
 
 /// Local systems up to kDenseLocalLimit unknowns, or up to kDenseLocalMax with more than
-/// kDenseLocalDensity of their entries nonzero, are factorized densely (blocked LLT), others by
-/// a sparse Cholesky with AMD ordering. Measured on the 64x16x16 accordion, rho = 2 fine rings,
-/// loaded machine: the systems of the fine step (~1000 wavelets) took 45 s sparse and 61 s
-/// dense, those of the coarse step (B^1 27% dense) 30 s sparse and under 1 s dense. From
-/// kSupernodalLocalMin unknowns the sparse factorization is CHOLMOD's supernodal one (AMD
-/// ordering, one BLAS thread per OpenMP thread), else Eigen's simplicial one: on the 24x12x12
-/// hex checker with rho = 5 fine rings (regions of ~1000-4000 wavelets, 2 threads) the localized
-/// solves took 15.7 s with CHOLMOD from 2500 unknowns and 8.4-10 s from 1000 (from 400: the same).
-constexpr Index kDenseLocalLimit = 400;
+/// kDenseLocalDensity of their entries nonzero, are factorized densely (LAPACK), others by
+/// CHOLMOD's supernodal Cholesky (AMD ordering, one BLAS thread per OpenMP thread), whose
+/// symbolic analysis is reused across regions of the same shape. Measured (bench_mra, checker,
+/// 2 threads, localized solves): 24^3 cells, rho = 2 fine rings (regions of 400-1000 unknowns)
+/// 10.5 s with Eigen's simplicial LLT from 400 unknowns (re-ordered per region) and 3.8 s with
+/// CHOLMOD from 100; 32^3: 24.9 s against 9.6 s. The dense bounds: 100 against 400 unknowns
+/// gave 0.84 s against 1.10 s on 24x12x12, 3 levels, rho = 2 (5.0 s against 5.5 s at rho = 5);
+/// the density 0.25 against 0.5 and never dense gave 0.59 / 0.81 / 0.73 s for the coarse step
+/// of 24x12x12 and 5.3 / 4.7 / 5.9 s for that of 32x16x16 (3 levels, rho = 5: B^1 regions of
+/// ~1000-6000 unknowns, ~25-55% dense), equal within this machine's +-10%.
+constexpr Index kDenseLocalLimit = 100;
 constexpr Index kDenseLocalMax = 4000;
 constexpr double kDenseLocalDensity = 0.25;
-constexpr Index kSupernodalLocalMin = 1000;
 
 /// Solves b x = rhs for a local SPD matrix b (compressed, both triangles). `solver` is the
 /// calling thread's: when b has the pattern of its last CHOLMOD factorization (regions of the
@@ -51,19 +51,13 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs, solve::SpdSolver& s
     if (b.rows() <= kDenseLocalLimit ||
         (b.rows() <= kDenseLocalMax &&
          static_cast<double>(b.nonZeros()) > kDenseLocalDensity * n * n)) {
-        const Eigen::LLT<Matrix> llt(Matrix(b).selfadjointView<Eigen::Lower>());
-        CG_VERIFY(llt.info() == Eigen::Success,
+        solve::DenseCholesky llt;
+        CG_VERIFY(llt.compute(Matrix(b)) == 0,
                   "mra: a local wavelet stiffness (n = {}) is not positive definite", b.rows());
         return llt.solve(rhs);
     }
-    if (b.rows() >= kSupernodalLocalMin) {
-        solver.factorize(b);
-        return solver.solve(rhs);
-    }
-    Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>> llt(b);
-    CG_VERIFY(llt.info() == Eigen::Success,
-              "mra: a local wavelet stiffness (n = {}) is not positive definite", b.rows());
-    return llt.solve(rhs);
+    solver.factorize(b);
+    return solver.solve(rhs);
 }
 
 /// Options of the local CHOLMOD factorizations: AMD alone (METIS costs more than it saves on

@@ -357,6 +357,31 @@ void check_dense_values(const Matrix& D, const std::string& where) {
 
 }  // namespace
 
+Index DenseCholesky::compute(Matrix A) {
+    CG_VERIFY(A.rows() == A.cols(), "dense Cholesky: the matrix is {} by {}, it must be square",
+              A.rows(), A.cols());
+    m_factor = std::move(A);
+    const int n = static_cast<int>(m_factor.rows());
+    int info = 0;
+    match_blas_threads();
+    if (n > 0) dpotrf_("L", &n, m_factor.data(), &n, &info, 1);
+    CG_VERIFY(info >= 0, "dense Cholesky: LAPACK dpotrf rejected argument {}", -info);
+    m_ok = info == 0;
+    return info;
+}
+
+Matrix DenseCholesky::solve(const Matrix& b) const {
+    CG_VERIFY(m_ok, "dense Cholesky: solve called before a successful compute");
+    CG_VERIFY(b.rows() == m_factor.rows(),
+              "dense Cholesky: the right-hand side has {} rows, the matrix {}", b.rows(),
+              m_factor.rows());
+    Matrix x = b;
+    const auto L = m_factor.triangularView<Eigen::Lower>();
+    L.solveInPlace(x);
+    L.transpose().solveInPlace(x);
+    return x;
+}
+
 std::string backend_name(Backend b) {
     switch (b) {
         case Backend::Cholmod:
@@ -385,10 +410,10 @@ struct SpdSolver::Impl {
     bool factorized = false;
     FactorStats stats;
     std::unique_ptr<CholmodFactor> cholmod;
-    /// Cholmod backend on a dense matrix (is_dense): its lower Cholesky factor from LAPACK,
-    /// in place of CHOLMOD's.
+    /// Cholmod backend on a dense matrix (is_dense): LAPACK's factorization in place of
+    /// CHOLMOD's.
     bool dense = false;
-    Matrix dense_factor;
+    DenseCholesky dense_factor;
     std::unique_ptr<Ldlt> ldlt;
     std::unique_ptr<Cg> cg;
     SparseMatrix cg_matrix;  // CG keeps a reference to its matrix, so it gets its own copy
@@ -404,7 +429,7 @@ struct SpdSolver::Impl {
     Matrix solve_factored(const Matrix& b) const {
         switch (options.backend) {
             case Backend::Cholmod:
-                return dense ? solve_dense(b) : Matrix(cholmod->solve(b));
+                return dense ? dense_factor.solve(b) : Matrix(cholmod->solve(b));
             case Backend::SimplicialLDLT:
                 return ldlt->solve(b);
             case Backend::ConjugateGradient:
@@ -413,30 +438,18 @@ struct SpdSolver::Impl {
         return {};
     }
 
-    /// Factorizes a dense A (both triangles stored) with LAPACK: dense_factor = L, A = L L^T.
+    /// Factorizes a dense A (both triangles stored) with LAPACK.
     void factorize_dense(const SparseMatrix& A) {
-        dense_factor = A;
-        check_dense_values(dense_factor, fmt::format("solver ({})", name()));
-        const int size = static_cast<int>(n);
-        int info = 0;
-        match_blas_threads();
-        dpotrf_("L", &size, dense_factor.data(), &size, &info, 1);
-        CG_VERIFY(info >= 0, "solver (cholmod): LAPACK dpotrf rejected argument {}", -info);
-        if (info > 0) {
+        Matrix D = A;
+        check_dense_values(D, fmt::format("solver ({})", name()));
+        const Index minor = dense_factor.compute(std::move(D));
+        if (minor > 0) {
             not_positive_definite(fmt::format(
-                "LAPACK dpotrf: the leading minor of order {} is not positive definite", info));
+                "LAPACK dpotrf: the leading minor of order {} is not positive definite", minor));
         }
-        const auto d = dense_factor.diagonal();
+        const auto d = dense_factor.factor().diagonal();
         const double ratio = std::pow(d.minCoeff() / d.maxCoeff(), 2);
         if (!(ratio >= kSuspectPivotRatio)) check_numerically_singular(A, ratio);
-    }
-
-    Matrix solve_dense(const Matrix& b) const {
-        Matrix x = b;
-        const auto L = dense_factor.triangularView<Eigen::Lower>();
-        L.solveInPlace(x);
-        L.transpose().solveInPlace(x);
-        return x;
     }
 
     // Called when the pivot ratio is suspicious: two steps of inverse iteration from a fixed
@@ -495,7 +508,7 @@ void SpdSolver::analyze(const SparseMatrix& A) {
     s.pattern = s.dense ? 0 : pattern_hash(A);
     switch (s.options.backend) {
         case Backend::Cholmod: {
-            s.dense_factor.resize(0, 0);
+            s.dense_factor = DenseCholesky();
             if (s.dense) {
                 s.cholmod.reset();
                 const double n = static_cast<double>(s.n);

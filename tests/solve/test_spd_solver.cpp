@@ -533,3 +533,23 @@ TEST(SpdSolver, DenseMatricesAreCheckedLikeSparseOnes) {
     EXPECT_LT((2 * solver.solve(b) - x).norm(), 1e-10 * x.norm());
     EXPECT_TRUE(is_permutation_of_range(solver.permutation(), n));
 }
+
+// DenseCholesky (LAPACK) solves like Eigen's LLT (1e-12: condition number below 10), reports
+// the order of the first leading minor that is not positive definite, and refuses to solve
+// after such a failure or before any factorization.
+TEST(DenseCholesky, SolvesAndReportsTheFailingMinor) {
+    const Index n = 80;
+    const Matrix X = random_matrix(n, n, 29);
+    const Matrix D = X * X.transpose() + static_cast<double>(n) * Matrix::Identity(n, n);
+    const Matrix B = random_matrix(n, 3, 30);
+    solve::DenseCholesky llt;
+    EXPECT_THROW(llt.solve(B), Error);
+    EXPECT_EQ(llt.compute(D), 0);
+    const Matrix x = D.llt().solve(B);
+    EXPECT_LT((llt.solve(B) - x).norm(), 1e-12 * x.norm());
+    Matrix indefinite = D;
+    indefinite(6, 6) = -1.0;  // the leading minor of order 7 has a negative pivot
+    EXPECT_EQ(llt.compute(indefinite), 7);
+    EXPECT_THROW(llt.solve(B), Error);
+    EXPECT_THROW(llt.compute(Matrix(3, 4)), Error);
+}
