@@ -142,6 +142,11 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     const Index n_dofs = mesh.num_dofs();
     CG_VERIFY(K.rows() == n_dofs && K.cols() == n_dofs, "mra: K is {}x{}, the mesh has {} DOFs",
               K.rows(), K.cols(), n_dofs);
+    // Checked once here: the localized solves factorize submatrices without input checks.
+    for (Index j = 0; j < K.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(K, j); it; ++it)
+            CG_VERIFY(std::isfinite(it.value()), "mra: K({}, {}) = {} is not finite", it.row(), j,
+                      it.value());
     CG_VERIFY(options.radius.size() == 1 || static_cast<int>(options.radius.size()) == q - 1,
               "mra: radius has {} entries, expected 1 or levels - 1 = {}", options.radius.size(),
               q - 1);

@@ -61,10 +61,12 @@ Matrix local_solve(const SparseMatrix& b, const Matrix& rhs, solve::SpdSolver& s
 }
 
 /// Options of the local CHOLMOD factorizations: AMD alone (METIS costs more than it saves on
-/// many small systems).
+/// many small systems), no input checks: the systems are principal submatrices of the
+/// symmetrized B^k, made of the fine stiffness that build_hierarchy checked.
 solve::SolverOptions local_options() {
     solve::SolverOptions options;
     options.amd_only = true;
+    options.check_input = false;
     return options;
 }
 

@@ -558,7 +558,7 @@ void SpdSolver::factorize(const SparseMatrix& A) {
 void SpdSolver::factorize_analyzed(const SparseMatrix& A) {
     Impl& s = *m_impl;
     s.factorized = false;
-    if (!s.dense) check_values(A, fmt::format("solver ({})", s.name()));
+    if (!s.dense && s.options.check_input) check_values(A, fmt::format("solver ({})", s.name()));
 
     switch (s.options.backend) {
         case Backend::Cholmod: {

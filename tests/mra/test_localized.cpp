@@ -302,6 +302,21 @@ TEST_P(MraLocalized, DefectDrivenRadiusBelowRoundOffGrowsToTheGlobalSolves) {
     EXPECT_THROW(build_hierarchy(p.mesh, p.K, p.bc.dofs, o), Error);
 }
 
+TEST_P(MraLocalized, NonFiniteStiffnessIsAnError) {
+    // The local factorizations skip their input checks; the fine stiffness is checked once.
+    const Eigen::Vector3i cells = dim() == 2 ? Eigen::Vector3i(8, 8, 1) : Eigen::Vector3i(4, 4, 4);
+    test::GridProblem p = test::hung_problem(dim(), cells, 1.0, 1e3, test::checker_pattern);
+    p.K.coeffRef(p.K.rows() / 2, p.K.rows() / 2) = std::nan("");
+    Options o = test::exact_options(2, refinement());
+    o.radius = {2};
+    try {
+        build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+        ADD_FAILURE() << "a NaN stiffness was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("is not finite"), std::string::npos) << e.what();
+    }
+}
+
 TEST_P(MraLocalized, PatchRegionsSolveTheirLocalSystems) {
     // Sec. 3.5 with patches: every row i of Z vanishes outside S_i (the wavelets touching the
     // fine nodes within rho rings of node i's patch) and solves B[S_i, S_i] z = -R[S_i, i],
