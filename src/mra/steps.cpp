@@ -1,9 +1,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <map>
 #include <mutex>
+#include <utility>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/element.hpp"
@@ -29,8 +31,9 @@ constexpr Index kMinParallelColumns = 4096;
 
 /// Local systems up to kDenseLocalLimit unknowns, or up to kDenseLocalMax with more than
 /// kDenseLocalDensity of their entries nonzero, are factorized densely (LAPACK), others by
-/// CHOLMOD's supernodal Cholesky (AMD ordering, one BLAS thread per OpenMP thread), whose
-/// symbolic analysis is reused across regions of the same shape. Measured (bench_mra, checker,
+/// CHOLMOD's supernodal Cholesky (one BLAS thread per OpenMP thread), in an AMD order the
+/// region builds its system in (no permuted copies inside CHOLMOD), order and symbolic analysis
+/// reused across regions of the same pattern (solve_region). Measured (bench_mra, checker,
 /// 2 threads, localized solves): 24^3 cells, rho = 2 fine rings (regions of 400-1000 unknowns)
 /// 10.5 s with Eigen's simplicial LLT from 400 unknowns (re-ordered per region) and 3.8 s with
 /// CHOLMOD from 100; 32^3: 24.9 s against 9.6 s. The dense bounds: 100 against 400 unknowns
@@ -42,38 +45,32 @@ constexpr Index kDenseLocalLimit = 100;
 constexpr Index kDenseLocalMax = 4000;
 constexpr double kDenseLocalDensity = 0.25;
 
-/// Solves b x = rhs for a local SPD matrix b (compressed, both triangles). `solver` is the
-/// calling thread's: when b has the pattern of its last CHOLMOD factorization (regions of the
-/// same shape, away from the grid's boundary and the Dirichlet nodes), the symbolic analysis
-/// is reused.
-Matrix local_solve(const SparseMatrix& b, const Matrix& rhs, solve::SpdSolver& solver) {
-    const double n = static_cast<double>(b.rows());
-    if (b.rows() <= kDenseLocalLimit ||
-        (b.rows() <= kDenseLocalMax &&
-         static_cast<double>(b.nonZeros()) > kDenseLocalDensity * n * n)) {
-        solve::DenseCholesky llt;
-        CG_VERIFY(llt.compute(Matrix(b)) == 0,
-                  "mra: a local wavelet stiffness (n = {}) is not positive definite", b.rows());
-        return llt.solve(rhs);
-    }
-    solver.factorize(b);
-    return solver.solve(rhs);
-}
-
-/// Options of the local CHOLMOD factorizations: AMD alone (METIS costs more than it saves on
-/// many small systems), no input checks: the systems are principal submatrices of the
-/// symmetrized B^k, made of the fine stiffness that build_hierarchy checked.
+/// Options of the local CHOLMOD factorizations: in the AMD order the caller applied (keep_order;
+/// AMD alone, as METIS costs more than it saves on many small systems), without input checks:
+/// the systems are principal submatrices of the symmetrized B^k, made of the fine stiffness that
+/// build_hierarchy checked.
 solve::SolverOptions local_options() {
     solve::SolverOptions options;
-    options.amd_only = true;
+    options.keep_order = true;
     options.check_input = false;
     return options;
 }
 
+/// A fill-reducing order of a region's local system B[S, S] (AMD, postordered), kept for the
+/// next region of the same pattern: n, nnz and hash of its (row, column) pairs in S's order.
+struct LocalOrder {
+    Index n = -1;
+    Index nnz = -1;
+    std::uint64_t hash = 0;
+    std::vector<Index> perm;      ///< position k of the ordered system holds S[perm[k]]
+    std::vector<Index> position;  ///< inverse of perm
+};
+
 /// Per-thread scratch of the localized solves: `local`, the wavelet -> region row map (-1 for
 /// wavelets outside the region; whoever fills it restores it), the region's wavelets S and its
-/// B[S, S], a zero vector over the wavelets, and the sparse solvers, one per growth step of
-/// the region (Eq. 12 defect-driven radius), kept across regions for their symbolic analyses.
+/// B[S, S], a zero vector over the wavelets, and per growth step of the region (Eq. 12
+/// defect-driven radius) a sparse solver and its order, kept across regions for their symbolic
+/// analyses.
 struct RegionScratch {
     explicit RegionScratch(Index wavelets)
         : local(static_cast<std::size_t>(wavelets), -1),
@@ -83,6 +80,7 @@ struct RegionScratch {
     SparseMatrix b;
     std::vector<double> work;
     std::vector<solve::SpdSolver> solvers;
+    std::vector<LocalOrder> orders;
 };
 
 }  // namespace
@@ -204,16 +202,39 @@ void box_wavelets(const SparseMatrix& W, const std::vector<Index>& fine_local,
         local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
 }
 
-/// b = B[S, S] (both triangles), local[w] the position of wavelet w in S or -1, reusing b's
-/// storage. S is sorted, so local is increasing on S and B's sorted columns give sorted local
-/// columns.
-void principal_block(const SparseMatrix& B, const std::vector<Index>& S,
-                     const std::vector<Index>& local, SparseMatrix& b) {
-    const Index ns = static_cast<Index>(S.size());
+/// nnz and a hash of the pattern of B[S, S] in S's order (local[w]: the position of wavelet w
+/// in S, or -1): the sum of a mix of every entry's (row, column), as in SpdSolver.
+std::pair<Index, std::uint64_t> block_pattern(const SparseMatrix& B, const std::vector<Index>& S,
+                                              const std::vector<Index>& local) {
+    const auto mix = [](std::uint64_t h) {
+        h ^= h >> 33;
+        h *= 0xff51afd7ed558ccdULL;
+        h ^= h >> 33;
+        h *= 0xc4ceb9fe1a85ec53ULL;
+        return h ^ (h >> 33);
+    };
     Index nnz = 0;
-    for (const Index w : S)
-        for (SparseMatrix::InnerIterator it(B, w); it; ++it)
-            nnz += local[static_cast<std::size_t>(it.row())] >= 0 ? 1 : 0;
+    std::uint64_t hash = 0;
+    for (std::size_t c = 0; c < S.size(); ++c) {
+        const std::uint64_t column = static_cast<std::uint64_t>(c) << 32;
+        for (SparseMatrix::InnerIterator it(B, S[c]); it; ++it) {
+            const Index r = local[static_cast<std::size_t>(it.row())];
+            if (r < 0) continue;
+            ++nnz;
+            hash += mix(column | static_cast<std::uint32_t>(r));
+        }
+    }
+    return {nnz, hash};
+}
+
+/// b = B[S, S] (both triangles, nnz entries), local[w] the position of wavelet w in S or -1,
+/// reusing b's storage. Without `order`, in S's order: S is sorted, so local is increasing on S
+/// and B's sorted columns give sorted local columns. With it, in the order's: column k is S's
+/// order->perm[k], row positions through order->position, unsorted within a column.
+void principal_block(const SparseMatrix& B, const std::vector<Index>& S,
+                     const std::vector<Index>& local, Index nnz, const LocalOrder* order,
+                     SparseMatrix& b) {
+    const Index ns = static_cast<Index>(S.size());
     b.resize(ns, ns);
     b.resizeNonZeros(nnz);
     Index* outer = b.outerIndexPtr();
@@ -222,15 +243,58 @@ void principal_block(const SparseMatrix& B, const std::vector<Index>& S,
     Index k = 0;
     for (Index c = 0; c < ns; ++c) {
         outer[c] = k;
-        for (SparseMatrix::InnerIterator it(B, S[static_cast<std::size_t>(c)]); it; ++it) {
+        const Index from = order ? order->perm[static_cast<std::size_t>(c)] : c;
+        for (SparseMatrix::InnerIterator it(B, S[static_cast<std::size_t>(from)]); it; ++it) {
             const Index r = local[static_cast<std::size_t>(it.row())];
             if (r >= 0) {
-                inner[k] = r;
+                inner[k] = order ? order->position[static_cast<std::size_t>(r)] : r;
                 value[k++] = it.value();
             }
         }
     }
     outer[ns] = k;
+}
+
+/// Solves B[S, S] x = rhs (rhs in S's order) with the calling thread's scratch: densely
+/// (LAPACK) when small or dense, else by CHOLMOD in the fill-reducing order of the last region
+/// of the same pattern at this growth step (`attempt`), or a new AMD order. local[w] is the
+/// position of wavelet w in S or -1.
+Matrix solve_region(const SparseMatrix& B, const std::vector<Index>& S,
+                    const std::vector<Index>& local, const Matrix& rhs, RegionScratch& scratch,
+                    std::size_t attempt) {
+    const Index ns = static_cast<Index>(S.size());
+    const auto [nnz, hash] = block_pattern(B, S, local);
+    const double n = static_cast<double>(ns);
+    if (ns <= kDenseLocalLimit ||
+        (ns <= kDenseLocalMax && static_cast<double>(nnz) > kDenseLocalDensity * n * n)) {
+        principal_block(B, S, local, nnz, nullptr, scratch.b);
+        solve::DenseCholesky llt;
+        CG_VERIFY(llt.compute(Matrix(scratch.b)) == 0,
+                  "mra: a local wavelet stiffness (n = {}) is not positive definite", ns);
+        return llt.solve(rhs);
+    }
+    while (scratch.solvers.size() <= attempt) {
+        scratch.solvers.emplace_back(local_options());
+        scratch.orders.emplace_back();
+    }
+    LocalOrder& order = scratch.orders[attempt];
+    if (order.n != ns || order.nnz != nnz || order.hash != hash) {
+        principal_block(B, S, local, nnz, nullptr, scratch.b);
+        const IndexVector perm = solve::amd_order(scratch.b);
+        order = {ns, nnz, hash, std::vector<Index>(perm.begin(), perm.end()),
+                 std::vector<Index>(static_cast<std::size_t>(ns))};
+        for (Index k = 0; k < ns; ++k) order.position[static_cast<std::size_t>(perm[k])] = k;
+    }
+    principal_block(B, S, local, nnz, &order, scratch.b);
+    Matrix ordered(ns, rhs.cols());
+    for (Index k = 0; k < ns; ++k)
+        ordered.row(k) = rhs.row(order.perm[static_cast<std::size_t>(k)]);
+    solve::SpdSolver& solver = scratch.solvers[attempt];
+    solver.factorize(scratch.b);
+    ordered = solver.solve(ordered);
+    Matrix x(ns, rhs.cols());
+    for (Index k = 0; k < ns; ++k) x.row(order.perm[static_cast<std::size_t>(k)]) = ordered.row(k);
+    return x;
 }
 
 /// The columns `cols` of M as a dense block over the rows where they have a nonzero (`rows`,
@@ -417,7 +481,6 @@ LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spars
             const auto [lo, hi] = region.box(r, nf);
             box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
             const Index ns = static_cast<Index>(S.size());
-            principal_block(B, S, local, scratch.b);
             // The right-hand sides R[S, rows].
             Matrix rhs = Matrix::Zero(ns, nr);
             for (Index q = 0; q < nr; ++q)
@@ -426,10 +489,9 @@ LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spars
                     const Index l = local[static_cast<std::size_t>(it.row())];
                     if (l >= 0) rhs(l, q) = it.value();
                 }
+            if (ns > 0) x = solve_region(B, S, local, rhs, scratch, attempt);
             for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
             if (ns == 0) return;
-            if (scratch.solvers.size() <= attempt) scratch.solvers.emplace_back(local_options());
-            x = local_solve(scratch.b, rhs, scratch.solvers[attempt]);
             const bool whole = (lo.array() == 0).all() && (hi.array() == nf.array() - 1).all();
             if (!adaptive || r >= rings.max || whole ||
                 orthogonality_defect(B, R, x, rows, S, scratch.work) <= rings.defect_tolerance)
@@ -539,18 +601,16 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
         const Eigen::Vector3i hi = (2 * part.cell.array() + 2 + rings).min(nf.array() - 1);
         box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
         const Index ns = static_cast<Index>(S.size());
-        principal_block(B, S, local, scratch.b);
-        const SparseMatrix& b = scratch.b;
         Matrix rhs = Matrix::Zero(ns, crows.size());
         for (Index r = 0; r < wrows.size(); ++r) {
             const Index s = local[static_cast<std::size_t>(wrows[r])];
             if (s >= 0) rhs.row(s) = rt.row(r);
         }
+        Matrix x;
+        if (ns > 0) x = solve_region(B, S, local, rhs, scratch, 0);
         for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
         if (ns == 0) return;
-        if (scratch.solvers.empty()) scratch.solvers.emplace_back(local_options());
-        append_solution(local_solve(b, rhs, scratch.solvers.front()),
-                        std::vector<Index>(crows.begin(), crows.end()), S,
+        append_solution(x, std::vector<Index>(crows.begin(), crows.end()), S,
                         out[static_cast<std::size_t>(n)]);
     });
     return from_parts(out, nc, nw);

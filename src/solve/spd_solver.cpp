@@ -92,6 +92,13 @@ class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
         cholmod().nmethods = 1;
         cholmod().method[0].ordering = CHOLMOD_AMD;
     }
+    /// The next analyzePattern keeps A's order, without postordering: factorizations then read
+    /// A's lower triangle in place (no permuted copies).
+    void use_natural_order() {
+        cholmod().nmethods = 1;
+        cholmod().method[0].ordering = CHOLMOD_NATURAL;
+        cholmod().postorder = 0;
+    }
     bool has_factor() const { return m_cholmodFactor != nullptr; }
     /// Column at which the factorization stopped (n on success).
     Index minor() const { return static_cast<Index>(m_cholmodFactor->minor); }
@@ -382,6 +389,39 @@ Matrix DenseCholesky::solve(const Matrix& b) const {
     return x;
 }
 
+IndexVector amd_order(const SparseMatrix& A) {
+    CG_VERIFY(A.rows() == A.cols() && A.isCompressed(),
+              "amd_order: the matrix must be square and compressed, got {} by {}", A.rows(),
+              A.cols());
+    const Index n = static_cast<Index>(A.rows());
+    if (n == 0) return {};
+    cholmod_sparse pattern{};
+    pattern.nrow = pattern.ncol = static_cast<std::size_t>(n);
+    pattern.nzmax = static_cast<std::size_t>(A.nonZeros());
+    pattern.p = const_cast<int*>(A.outerIndexPtr());
+    pattern.i = const_cast<int*>(A.innerIndexPtr());
+    pattern.stype = -1;
+    pattern.itype = CHOLMOD_INT;
+    pattern.xtype = CHOLMOD_PATTERN;
+    pattern.dtype = CHOLMOD_DOUBLE;
+    pattern.sorted = 1;
+    pattern.packed = 1;
+    cholmod_common common;
+    cholmod_start(&common);
+    common.print = 0;
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_AMD;
+    common.postorder = 1;
+    common.supernodal = CHOLMOD_SIMPLICIAL;  // only the ordering is wanted
+    cholmod_factor* L = cholmod_analyze(&pattern, &common);
+    CG_VERIFY(L != nullptr, "amd_order: AMD on {} unknowns failed (CHOLMOD status {})", n,
+              common.status);
+    const IndexVector perm = Eigen::Map<const IndexVector>(static_cast<const int*>(L->Perm), n);
+    cholmod_free_factor(&L, &common);
+    cholmod_finish(&common);
+    return perm;
+}
+
 std::string backend_name(Backend b) {
     switch (b) {
         case Backend::Cholmod:
@@ -517,8 +557,11 @@ void SpdSolver::analyze(const SparseMatrix& A) {
             }
             s.cholmod = std::make_unique<CholmodFactor>();
             std::string ordering;
-            if (const std::vector<Index> start = column_groups(A, s.options.node_dofs);
-                static_cast<Index>(start.size()) - 1 < s.n) {
+            if (s.options.keep_order) {
+                s.cholmod->use_natural_order();
+                s.cholmod->analyzePattern(A);
+            } else if (const std::vector<Index> start = column_groups(A, s.options.node_dofs);
+                       static_cast<Index>(start.size()) - 1 < s.n) {
                 auto [perm, name] = group_ordering(A, start);
                 s.cholmod->analyze_permuted(A, perm);
                 ordering = std::move(name);

@@ -36,6 +36,13 @@ struct SolverOptions {
     /// smaller fill saves: the hierarchy's localized solves (24x12x12 hex grid, rho = 5, ~1000-4000
     /// unknowns each) took 7.8 s against 10.8 s.
     bool amd_only = false;
+    /// cholmod: A is already in a fill-reducing, postordered order (the caller applied the
+    /// permutation() of an earlier analysis of its pattern): CHOLMOD keeps A's order and reads
+    /// its lower triangle in place, without the two permuted transposes per factorization that
+    /// a fill-reducing ordering costs (the hierarchy's localized solves: 13% of their time at
+    /// 40x20x20, rho = 5). The rows of a column may then come in any order when check_input
+    /// is off.
+    bool keep_order = false;
     /// Check every factorized matrix for non-finite values and symmetry (O(nnz)). Off only for
     /// matrices symmetric by construction whose values were checked upstream: the hierarchy's
     /// localized solves factorize thousands of principal submatrices of the symmetrized B^k,
@@ -75,6 +82,13 @@ class DenseCholesky {
     Matrix m_factor;
     bool m_ok = false;
 };
+
+/// Fill-reducing order of the pattern of a symmetric A (lower triangle read, rows sorted):
+/// CHOLMOD's AMD followed by its elimination-tree postorder (new column k = old perm[k]), the
+/// order SpdSolver's amd_only analysis uses, without its supernodal analysis. For
+/// SolverOptions::keep_order.
+/// @throws Error if A is not square and compressed
+IndexVector amd_order(const SparseMatrix& A);
 
 /// Symmetric positive-definite sparse solver that keeps its factorization: factorize once,
 /// solve many right-hand sides. Checks that the matrix is square, finite and symmetric, and
