@@ -221,6 +221,9 @@
 /// same shape (regions sorted by shape; B keeps its structural pattern, or cancellations that
 /// depend on the material would give regions of one shape different patterns), B[S, S] built
 /// in place, Z built row by row instead of from triplets, A^k assembled symmetric in place.
+/// (d) session 13: local systems built in their AMD order and factorized in place (no
+/// permuted transposes inside CHOLMOD), no per-system symmetry check, CHOLMOD with symbolic
+/// reuse from 100 unknowns instead of Eigen's simplicial LLT below 1000, dense ones by LAPACK.
 /// Peak = the bench's high-water mark (fine problem and its solve included; (c) patch 2 was
 /// measured before the last two changes, which took patch 1 from 1393 to 1261 MB).
 ///
@@ -231,19 +234,31 @@
 /// | 1     | (c) | 39.1    | 30.0     | 5.9   | 611        | 1261    | 0.58           |
 /// | 2     | (b) | 52.6    | 17.0     | 30.5  | 769        | 2820    | 0.48           |
 /// | 2     | (c) | 22.0    | 10.2     | 7.7   | 771        | 1848    | 0.48           |
+/// | 1     | (d) | 29.1-30.1 | 22.0-22.3 | 4.2  | 611        | 1272    | 0.58           |
+/// | 2     | (d) | 22.6    | 10.9     | 7.0   | 771        | 1848    | 0.48           |
 ///
-/// Growth with the grid (same setting, patch 1, (c); nodes: build s, storage MB): 1,377: 1.9,
-/// 22; 4,225: 9.6, 101; 9,537: 19.7, 284; 18,081: 39.7, 611. From 4,225 to 18,081 nodes (4.3x)
-/// the build grows 4.1x, close to linear (small grids clip most regions at the boundary).
-/// 64^3 cells (274,625 nodes), two levels, rho = 2 fine rings: build 298.6 s (local solves
-/// 207 s, A^1 36 s, B 26 s), storage 5.2 GB (C̃ 1.1e8 entries, A^1 1.9e8, B 1.3e8), peak
-/// 10.3 GB from the start of the build, ~4.6 GB of it the bench's fine problem. At rho = 5,
-/// A^1 alone would need ~8.5 GB.
-/// Where the time goes at patch 1 (perf): the 2,541 local CHOLMOD factorizations (~3,500
-/// unknowns, 2e8 flops each): numeric 40% of the solves, CHOLMOD's permuted transpose of the
-/// input 25%, the symbolic analyses left (regions of new shapes) 15%, the input checks and
-/// B[S, S] the rest. A^1 is 36% dense: its factorization (3.3 s) is slower than the fine one
-/// (2.3 s) at this radius.
+/// Growth with the grid (same setting, patch 1; nodes: build s, storage MB): (c) 1,377: 1.9,
+/// 22; 4,225: 9.6, 101; 9,537: 19.7, 284; 18,081: 39.7, 611; (d) 1.3, 5.9, 14.1, 29.1 s. From
+/// 4,225 to 18,081 nodes (4.3x) the build grows 4.9x, close to linear (small grids clip most
+/// regions at the boundary, so their systems are smaller).
+/// 64^3 cells (274,625 nodes), two levels, rho = 2 fine rings: build 146.5 s in (d) (local
+/// solves 64.4 s, A^1 30.2 s, B 23.9 s, C̃ = C^† + Z W 15.6 s, invariance 7.7 s; (c): 298.6 s,
+/// local solves 207 s), storage 5.2 GB (C̃ 1.1e8 entries, A^1 1.9e8, B 1.3e8), peak 10.6 GB
+/// from the start of the build, ~4.6 GB of it the bench's fine problem. At rho = 5, A^1 alone
+/// would need ~8.5 GB. The regions' order: METIS instead of AMD took the solves of (d) at
+/// 40x20x20 from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s; AMD stays.
+/// Where the time goes at patch 1 (perf, (d)): the 2,541 local CHOLMOD factorizations (~3,500
+/// unknowns, 2e8 flops each) are mostly BLAS (dgemm and its copies: ~35% of the build's CPU
+/// time); CHOLMOD's permuted transposes of the input, 25% of the solves in (c), are gone, and
+/// ~21% of the regions (the clipped ones at the boundary) have a new pattern and pay an AMD
+/// order and a symbolic analysis. The Galerkin product A^1 takes ~11%, building B[S, S] 3%. A^1
+/// is 36% dense: its factorization (2.7 s) is slower than the fine one (1.6 s) at this radius.
+/// Three levels (bench_mra NX NY NZ 3 ...), coarsest factorize + solve against the fine one in
+/// the same run: the paper's beam (32x8x8, 2,673 nodes -> 81, rho = 5) 168-195x (0.40-0.49 ms
+/// + 0.05-0.08 ms against 82-100 ms; the paper: 0.87 s + 0.008 s -> 0.003 s + 0.00023 s);
+/// 40x20x20 with global solves at the coarse step (1188 coarse DOFs, dense) 105x. Both were
+/// 35-50x and 26.5x while the dense coarse operators went through CHOLMOD (solve::SpdSolver now
+/// hands them to LAPACK).
 #include <limits>
 #include <string>
 #include <vector>
