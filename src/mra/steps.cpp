@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/common/hash.hpp"
 #include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
@@ -203,16 +204,9 @@ void box_wavelets(const SparseMatrix& W, const std::vector<Index>& fine_local,
 }
 
 /// nnz and a hash of the pattern of B[S, S] in S's order (local[w]: the position of wavelet w
-/// in S, or -1): the sum of a mix of every entry's (row, column), as in SpdSolver.
+/// in S, or -1): the sum of mix64 over its (column, row) pairs, as in SpdSolver.
 std::pair<Index, std::uint64_t> block_pattern(const SparseMatrix& B, const std::vector<Index>& S,
                                               const std::vector<Index>& local) {
-    const auto mix = [](std::uint64_t h) {
-        h ^= h >> 33;
-        h *= 0xff51afd7ed558ccdULL;
-        h ^= h >> 33;
-        h *= 0xc4ceb9fe1a85ec53ULL;
-        return h ^ (h >> 33);
-    };
     Index nnz = 0;
     std::uint64_t hash = 0;
     for (std::size_t c = 0; c < S.size(); ++c) {
@@ -221,7 +215,7 @@ std::pair<Index, std::uint64_t> block_pattern(const SparseMatrix& B, const std::
             const Index r = local[static_cast<std::size_t>(it.row())];
             if (r < 0) continue;
             ++nnz;
-            hash += mix(column | static_cast<std::uint32_t>(r));
+            hash += mix64(column | static_cast<std::uint32_t>(r));
         }
     }
     return {nnz, hash};

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/common/hash.hpp"
 
 // LAPACK's dense Cholesky factorization and solve (Fortran ABI: OpenBLAS's LAPACK through
 // Debian's liblapack.so.3 alternative). The trailing arguments are the hidden lengths of the
@@ -153,6 +154,43 @@ std::vector<Index> column_groups(const SparseMatrix& A, int max_size) {
     return start;
 }
 
+/// Fill-reducing order of a symmetric pattern (n columns, CSC arrays p and i, lower triangle
+/// read) from CHOLMOD's analysis for the ordering only (simplicial, postordered): each of
+/// `methods` (CHOLMOD_AMD, ...) is tried and the one with the smaller factor kept. Returns the
+/// permutation (new column k = old perm[k]) and the chosen method.
+std::pair<std::vector<int>, int> order_pattern(Index n, const int* p, const int* i,
+                                               std::initializer_list<int> methods) {
+    cholmod_sparse pattern{};
+    pattern.nrow = pattern.ncol = static_cast<std::size_t>(n);
+    pattern.nzmax = static_cast<std::size_t>(p[n]);
+    pattern.p = const_cast<int*>(p);
+    pattern.i = const_cast<int*>(i);
+    pattern.stype = -1;
+    pattern.itype = CHOLMOD_INT;
+    pattern.xtype = CHOLMOD_PATTERN;
+    pattern.dtype = CHOLMOD_DOUBLE;
+    pattern.sorted = 1;
+    pattern.packed = 1;
+    cholmod_common common;
+    cholmod_start(&common);
+    common.print = 0;
+    common.nmethods = 0;
+    for (const int m : methods) common.method[common.nmethods++].ordering = m;
+    common.postorder = 1;
+    common.supernodal = CHOLMOD_SIMPLICIAL;  // only the ordering is wanted
+    cholmod_factor* L = cholmod_analyze(&pattern, &common);
+    CG_VERIFY(L != nullptr,
+              "solver (cholmod): ordering a pattern of {} columns failed (CHOLMOD status {}; out "
+              "of memory?)",
+              n, common.status);
+    const int* perm = static_cast<const int*>(L->Perm);
+    std::pair<std::vector<int>, int> out{std::vector<int>(perm, perm + n),
+                                         common.method[common.selected].ordering};
+    cholmod_free_factor(&L, &common);
+    cholmod_finish(&common);
+    return out;
+}
+
 /// Fill-reducing ordering of A computed on its quotient graph: one vertex per column group
 /// (a node), an edge where A has an entry between two groups. CHOLMOD tries AMD and METIS
 /// nested dissection on that graph, which has about (n / #groups)^2 times fewer edges than A,
@@ -176,38 +214,13 @@ std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
         }
         p.push_back(static_cast<int>(rows.size()));
     }
-    cholmod_sparse graph{};
-    graph.nrow = graph.ncol = static_cast<std::size_t>(groups);
-    graph.nzmax = rows.size();
-    graph.p = p.data();
-    graph.i = rows.data();
-    graph.stype = -1;
-    graph.itype = CHOLMOD_INT;
-    graph.xtype = CHOLMOD_PATTERN;
-    graph.dtype = CHOLMOD_DOUBLE;
-    graph.sorted = 1;
-    graph.packed = 1;
-
-    cholmod_common common;
-    cholmod_start(&common);
-    common.print = 0;
-    common.nmethods = 2;
-    common.method[0].ordering = CHOLMOD_AMD;
-    common.method[1].ordering = CHOLMOD_METIS;
-    common.supernodal = CHOLMOD_SIMPLICIAL;  // only the ordering is wanted
-    cholmod_factor* L = cholmod_analyze(&graph, &common);
-    CG_VERIFY(L != nullptr,
-              "solver (cholmod): ordering the graph of {} nodes failed (CHOLMOD status {}; out of "
-              "memory?)",
-              groups, common.status);
-    const int* group_perm = static_cast<const int*>(L->Perm);
+    const auto [group_perm, method] =
+        order_pattern(groups, p.data(), rows.data(), {CHOLMOD_AMD, CHOLMOD_METIS});
     std::vector<int> perm;
     perm.reserve(A.cols());
     for (Index k = 0; k < groups; ++k)
         for (Index j = start[group_perm[k]]; j < start[group_perm[k] + 1]; ++j) perm.push_back(j);
-    std::string name = ordering_name(common.method[common.selected].ordering);
-    cholmod_free_factor(&L, &common);
-    cholmod_finish(&common);
+    std::string name = ordering_name(method);
     return {std::move(perm), "node-" + name};
 }
 
@@ -270,13 +283,6 @@ bool is_dense(const SparseMatrix& A) {
 // equal hashes; the solver compares n and nnz as well. (A per-column chain of mixes, each
 // waiting for the previous one, took 4% of the hierarchy's localized solves.)
 std::uint64_t pattern_hash(const SparseMatrix& A) {
-    const auto mix = [](std::uint64_t h) {
-        h ^= h >> 33;
-        h *= 0xff51afd7ed558ccdULL;
-        h ^= h >> 33;
-        h *= 0xc4ceb9fe1a85ec53ULL;
-        return h ^ (h >> 33);
-    };
     const int* outer = A.outerIndexPtr();
     const int* inner = A.innerIndexPtr();
     std::uint64_t total = 0;
@@ -284,7 +290,7 @@ std::uint64_t pattern_hash(const SparseMatrix& A) {
     for (Index j = 0; j < A.outerSize(); ++j) {
         const std::uint64_t column = static_cast<std::uint64_t>(j) << 32;
         for (int k = outer[j]; k < outer[j + 1]; ++k)
-            total += mix(column | static_cast<std::uint32_t>(inner[k]));
+            total += mix64(column | static_cast<std::uint32_t>(inner[k]));
     }
     return total;
 }
@@ -393,33 +399,10 @@ IndexVector amd_order(const SparseMatrix& A) {
     CG_VERIFY(A.rows() == A.cols() && A.isCompressed(),
               "amd_order: the matrix must be square and compressed, got {} by {}", A.rows(),
               A.cols());
-    const Index n = static_cast<Index>(A.rows());
-    if (n == 0) return {};
-    cholmod_sparse pattern{};
-    pattern.nrow = pattern.ncol = static_cast<std::size_t>(n);
-    pattern.nzmax = static_cast<std::size_t>(A.nonZeros());
-    pattern.p = const_cast<int*>(A.outerIndexPtr());
-    pattern.i = const_cast<int*>(A.innerIndexPtr());
-    pattern.stype = -1;
-    pattern.itype = CHOLMOD_INT;
-    pattern.xtype = CHOLMOD_PATTERN;
-    pattern.dtype = CHOLMOD_DOUBLE;
-    pattern.sorted = 1;
-    pattern.packed = 1;
-    cholmod_common common;
-    cholmod_start(&common);
-    common.print = 0;
-    common.nmethods = 1;
-    common.method[0].ordering = CHOLMOD_AMD;
-    common.postorder = 1;
-    common.supernodal = CHOLMOD_SIMPLICIAL;  // only the ordering is wanted
-    cholmod_factor* L = cholmod_analyze(&pattern, &common);
-    CG_VERIFY(L != nullptr, "amd_order: AMD on {} unknowns failed (CHOLMOD status {})", n,
-              common.status);
-    const IndexVector perm = Eigen::Map<const IndexVector>(static_cast<const int*>(L->Perm), n);
-    cholmod_free_factor(&L, &common);
-    cholmod_finish(&common);
-    return perm;
+    if (A.rows() == 0) return {};
+    const std::vector<int> perm =
+        order_pattern(A.rows(), A.outerIndexPtr(), A.innerIndexPtr(), {CHOLMOD_AMD}).first;
+    return Eigen::Map<const IndexVector>(perm.data(), A.rows());
 }
 
 std::string backend_name(Backend b) {
