@@ -464,7 +464,7 @@ struct SpdSolver::Impl {
     /// Factorizes a dense A (both triangles stored) with LAPACK.
     void factorize_dense(const SparseMatrix& A) {
         Matrix D = A;
-        check_dense_values(D, fmt::format("solver ({})", name()));
+        if (options.check_input) check_dense_values(D, fmt::format("solver ({})", name()));
         const Index minor = dense_factor.compute(std::move(D));
         if (minor > 0) {
             not_positive_definite(fmt::format(
