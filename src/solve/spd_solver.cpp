@@ -244,14 +244,21 @@ std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
 // region (the hierarchy's localized solves: one factorization per thread) BLAS gets one thread:
 // with OpenMP's count, the 2 threads' concurrent factorizations each woke both OpenBLAS threads
 // (24x12x12 hex checker, rho = 5, 2 threads: localized solves 25.6 s, 18.5 s with one).
-void match_blas_threads() {
+// `serial`: one thread whatever OpenMP's count (small dense factorizations, kDenseParallelMin).
+void match_blas_threads(bool serial = false) {
     static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
     if (user_set) return;
     using SetThreads = void (*)(int);
     static const auto set =
         reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
-    if (set) set(omp_in_parallel() ? 1 : omp_get_max_threads());
+    if (set) set(serial || omp_in_parallel() ? 1 : omp_get_max_threads());
 }
+
+// Dense factorizations (DenseCholesky) of fewer unknowns run LAPACK on one thread: waking the
+// second OpenBLAS thread costs more than it shares. Measured (dpotrf, 2 cores, 2 threads
+// against 1): 243 unknowns 0.40 ms against 0.30-0.33 ms, 400: 1.15 against 1.0-1.04 ms, 800:
+// 8.6-9.1 against 9.5-9.9 ms, 1188: 10 against 17.5 ms.
+constexpr Index kDenseParallelMin = 800;
 
 using Ldlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>>;
 using Cg = Eigen::ConjugateGradient<SparseMatrix, Eigen::Lower | Eigen::Upper,
@@ -376,7 +383,7 @@ Index DenseCholesky::compute(Matrix A) {
     m_factor = std::move(A);
     const int n = static_cast<int>(m_factor.rows());
     int info = 0;
-    match_blas_threads();
+    match_blas_threads(n < kDenseParallelMin);
     if (n > 0) dpotrf_("L", &n, m_factor.data(), &n, &info, 1);
     CG_VERIFY(info >= 0, "dense Cholesky: LAPACK dpotrf rejected argument {}", -info);
     m_ok = info == 0;

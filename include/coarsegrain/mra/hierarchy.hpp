@@ -254,11 +254,13 @@
 /// order and a symbolic analysis. The Galerkin product A^1 takes ~11%, building B[S, S] 3%. A^1
 /// is 36% dense: its factorization (2.7 s) is slower than the fine one (1.6 s) at this radius.
 /// Three levels (bench_mra NX NY NZ 3 ...), coarsest factorize + solve against the fine one in
-/// the same run: the paper's beam (32x8x8, 2,673 nodes -> 81, rho = 5) 168-195x (0.40-0.49 ms
-/// + 0.05-0.08 ms against 82-100 ms; the paper: 0.87 s + 0.008 s -> 0.003 s + 0.00023 s);
-/// 40x20x20 with global solves at the coarse step (1188 coarse DOFs, dense) 105x. Both were
-/// 35-50x and 26.5x while the dense coarse operators went through CHOLMOD (solve::SpdSolver now
-/// hands them to LAPACK).
+/// the same run (medians of up to 5 timings each): the paper's beam (32x8x8, 2,673 nodes -> 81,
+/// rho = 5) 148-297x over 12 runs, median about 200x (coarsest 0.29-0.45 ms + 0.04-0.06 ms
+/// against 75-110 ms; sub-millisecond times make the ratio jittery here; the paper: 0.87 s +
+/// 0.008 s -> 0.003 s + 0.00023 s); 40x20x20 with global solves at the coarse step (1188
+/// coarse DOFs, dense) 105x. Both were 35-50x and 26.5x while the dense coarse operators went
+/// through CHOLMOD (solve::SpdSolver now hands them to LAPACK, on one BLAS thread below 800
+/// unknowns).
 #include <limits>
 #include <string>
 #include <vector>
