@@ -189,6 +189,8 @@
 /// | 64x16x16 | Dirac, 2        | 12.3    | 696     | 0.987          | 28x     |
 /// | 64x16x16 | Dirac, 1        | 2.3     | 619     | 0.61           | 196x    |
 ///
+/// (The speedups of this table predate session 13, when dense coarse operators still went
+/// through CHOLMOD; LAPACK now factorizes them 2-6x faster: see "Table 1's setting" below.)
 /// Builds are fast now, but on this cantilever every small radius fails: a coarsest error of
 /// 0.6-1.0 means the coarse model hardly moves (locking), against 0.003 for global solves.
 /// Larger regions do not help either within 20 s: on 32x8x8 with Dirac refinement, global solves
