@@ -148,8 +148,8 @@ int main(int argc, char** argv) {
         bytes += cg::mra::storage_bytes(L.C_adapted) + cg::mra::storage_bytes(L.A) +
                  cg::mra::storage_bytes(L.B) + cg::mra::storage_bytes(L.Phi) +
                  cg::mra::storage_bytes(L.Psi);
-        std::printf("level %d: %ld DOFs, nnz C %ld A %ld B %ld Phi %ld Psi %ld\n", k,
-                    static_cast<long>(L.A.rows()), static_cast<long>(L.C_adapted.nonZeros()),
+        std::printf("level %d: %ld DOFs, nnz C %ld A (lower) %ld B (lower) %ld Phi %ld Psi %ld\n",
+                    k, static_cast<long>(L.A.rows()), static_cast<long>(L.C_adapted.nonZeros()),
                     static_cast<long>(L.A.nonZeros()), static_cast<long>(L.B.nonZeros()),
                     static_cast<long>(L.Phi.nonZeros()), static_cast<long>(L.Psi.nonZeros()));
     }
@@ -162,7 +162,8 @@ int main(int argc, char** argv) {
     cg::Vector g(h.fine_dofs.size());
     for (cg::Index i = 0; i < g.size(); ++i) g[i] = p.f[h.fine_dofs[i]];
     const auto [ff, fs] = factorize_and_solve(h.A_fine, g);
-    const auto [cf, cs] = factorize_and_solve(h.level(1).A, cg::mra::coarse_grain(h, p.f, 1));
+    const auto [cf, cs] = factorize_and_solve(cg::mra::symmetric_from_lower(h.level(1).A),
+                                              cg::mra::coarse_grain(h, p.f, 1));
     std::printf(
         "fine factorize %.4f s + solve %.5f s; coarsest factorize %.5f s + solve %.6f s; "
         "ratio %.1fx\n",

@@ -61,7 +61,9 @@ Row evaluate(const cg::test::GridProblem& p, const Options& o) {
     r.err_g = cg::test::energy_norm(p.K, e) / p.f.norm();
     const cg::mra::Level& F = h.level(h.num_levels() - 1);
     r.dens_C = density(F.C_adapted);
-    r.dens_A = density(h.level(1).A);
+    r.dens_A =
+        static_cast<double>(cg::mra::symmetric_nonzeros(h.level(1).A)) /
+        (static_cast<double>(h.level(1).A.rows()) * static_cast<double>(h.level(1).A.rows()));
     const cg::SparseMatrix AWt = h.A_fine * cg::SparseMatrix(F.W.transpose());
     r.defect =
         cg::SparseMatrix(F.C_adapted * AWt).norm() / cg::SparseMatrix(F.C_dagger * AWt).norm();

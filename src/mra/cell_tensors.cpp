@@ -105,7 +105,8 @@ CellTensor coarsest_cell_tensor(const mesh::Mesh& mesh, const material::ElementM
     for (Index a = 0; a < F.cols(); ++a) G.col(a) = coarse_grain(h, F.col(a), 1);
     const double volume = (mesh.grid->max - mesh.grid->min).head(dim).prod();
     CellTensor t;
-    t.S = pseudo_inverse_form(Matrix(h.level(1).A), G, dim * (dim + 1) / 2) / volume;
+    t.S = pseudo_inverse_form(Matrix(symmetric_from_lower(h.level(1).A)), G, dim * (dim + 1) / 2) /
+          volume;
     t.S = 0.5 * (t.S + t.S.transpose()).eval();
     t.C = t.S.inverse();
     return t;

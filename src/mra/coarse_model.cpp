@@ -152,9 +152,9 @@ void add_stress_map(const scene::FineModel& fine, const Vector& u1, const Vector
                        {"coarsest_stress.png"}});
 }
 
-double density(const SparseMatrix& M) {
+double density(const SparseMatrix& M, Index nonzeros) {
     const double size = static_cast<double>(M.rows()) * static_cast<double>(M.cols());
-    return size > 0 ? static_cast<double>(M.nonZeros()) / size : 0.0;
+    return size > 0 ? static_cast<double>(nonzeros) / size : 0.0;
 }
 
 }  // namespace
@@ -267,7 +267,7 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
         for (Index i = 0; i < L1.dofs.size(); ++i) t.emplace_back(L1.dofs[i], i, s[i]);
         P.setFromTriplets(t.begin(), t.end());
     }
-    m.K = P * L1.A * SparseMatrix(P.transpose());
+    m.K = P * symmetric_from_lower(L1.A) * SparseMatrix(P.transpose());
     m.K.makeCompressed();
     m.f = P * coarse_grain(h, f_fine, 1);
     m.to_fine = SparseMatrix(basis(h, 1).transpose()) * SparseMatrix(P.transpose());
@@ -307,11 +307,11 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
              {"radius", std::isinf(L.radius) ? nlohmann::json("inf") : nlohmann::json(L.radius)},
              {"build_seconds", L.build_seconds},
              {"C_nnz", L.C_adapted.nonZeros()},
-             {"C_density", density(L.C_adapted)},
-             {"A_nnz", L.A.nonZeros()},
-             {"A_density", density(L.A)},
-             {"B_nnz", L.B.nonZeros()},
-             {"B_density", density(L.B)},
+             {"C_density", density(L.C_adapted, L.C_adapted.nonZeros())},
+             {"A_nnz", symmetric_nonzeros(L.A)},
+             {"A_density", density(L.A, symmetric_nonzeros(L.A))},
+             {"B_nnz", symmetric_nonzeros(L.B)},
+             {"B_density", density(L.B, symmetric_nonzeros(L.B))},
              {"Phi_bytes", storage_bytes(L.Phi)},
              {"Psi_bytes", storage_bytes(L.Psi)}});
         double rings_sum = 0;

@@ -59,15 +59,16 @@ Vector restrict_to(const Vector& v, const IndexVector& dofs) {
     return r;
 }
 
-/// Extreme eigenvalues of M, or NaN with L.spectrum_skipped set and the reason appended to
-/// L.spectrum_note if M has more than `limit` rows or Lanczos fails.
-Spectrum level_spectrum(const SparseMatrix& M, const char* name, Index limit, LevelDiagnostics& L) {
+/// Extreme eigenvalues of M (its lower triangle if `lower`), or NaN with L.spectrum_skipped set
+/// and the reason appended to L.spectrum_note if M has more than `limit` rows or Lanczos fails.
+Spectrum level_spectrum(const SparseMatrix& M, bool lower, const char* name, Index limit,
+                        LevelDiagnostics& L) {
     std::string reason;
     if (M.rows() > limit) {
         reason = fmt::format("{}: {} rows > max_spectrum_dofs {}", name, M.rows(), limit);
     } else {
         try {
-            return extreme_eigenvalues(M);
+            return extreme_eigenvalues(lower ? symmetric_from_lower(M) : M);
         } catch (const Error& e) {
             reason = fmt::format("{}: {}", name, e.what());
         }
@@ -75,6 +76,12 @@ Spectrum level_spectrum(const SparseMatrix& M, const char* name, Index limit, Le
     L.spectrum_skipped = true;
     L.spectrum_note += (L.spectrum_note.empty() ? "" : "; ") + reason;
     return {nan, nan};
+}
+
+/// sparsity() of the symmetric matrix whose lower triangle `lower` holds.
+double symmetric_sparsity(const SparseMatrix& lower) {
+    const double size = static_cast<double>(lower.rows()) * static_cast<double>(lower.cols());
+    return size > 0 ? 1.0 - static_cast<double>(symmetric_nonzeros(lower)) / size : 0.0;
 }
 
 }  // namespace
@@ -128,11 +135,12 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
         L.error_over_g = energy_norm(h.A_fine, e) / g_norm;
         L.error_over_u = energy_norm(h.A_fine, e) / u_norm;
         if (options.keep_solutions) d.solutions.push_back(std::move(u_k));
-        const Spectrum sa = level_spectrum(A, "A", options.max_spectrum_dofs, L);
+        const bool lower = k < q;  // Level::A is stored as its lower triangle, A_fine whole
+        const Spectrum sa = level_spectrum(A, lower, "A", options.max_spectrum_dofs, L);
         L.lambda_min_A = sa.lambda_min;
         L.lambda_max_A = sa.lambda_max;
         L.cond_A = sa.condition();
-        L.sparsity_A = sparsity(A);
+        L.sparsity_A = lower ? symmetric_sparsity(A) : sparsity(A);
         L.bytes_A = storage_bytes(A);
         if (k == q) {
             L.lambda_min_B = L.lambda_max_B = L.cond_B = nan;
@@ -142,12 +150,12 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
         const Level& lev = h.level(k);
         L.wavelets = lev.B.rows();
         const Spectrum sb = L.wavelets > 0
-                                ? level_spectrum(lev.B, "B", options.max_spectrum_dofs, L)
+                                ? level_spectrum(lev.B, true, "B", options.max_spectrum_dofs, L)
                                 : Spectrum{nan, nan};
         L.lambda_min_B = sb.lambda_min;
         L.lambda_max_B = sb.lambda_max;
         L.cond_B = sb.condition();
-        L.sparsity_B = sparsity(lev.B);
+        L.sparsity_B = symmetric_sparsity(lev.B);
         L.sparsity_C = sparsity(lev.C_adapted);
         L.bytes_Phi = storage_bytes(lev.Phi);
         L.bytes_Psi = storage_bytes(lev.Psi);

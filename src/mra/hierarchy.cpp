@@ -122,6 +122,20 @@ std::size_t storage_bytes(const SparseMatrix& M) {
            static_cast<std::size_t>(M.outerSize() + 1) * sizeof(Index);
 }
 
+SparseMatrix symmetric_from_lower(const SparseMatrix& lower) {
+    SparseMatrix full = lower.selfadjointView<Eigen::Lower>();
+    full.makeCompressed();
+    return full;
+}
+
+Index symmetric_nonzeros(const SparseMatrix& lower) {
+    Index count = 0;
+    for (Index j = 0; j < lower.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(lower, j); it; ++it)
+            if (it.value() != 0.0) count += it.row() == j ? 1 : 2;
+    return count;
+}
+
 Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                           const std::vector<Index>& fixed_dofs, const Options& options,
                           const material::ElementMaterials* materials) {
@@ -238,7 +252,10 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
     };
     h.levels.resize(static_cast<std::size_t>(q - 1));
+    // A^{k+1} with both triangles, as the products take it: the fine operator, then a transient
+    // copy of the level above (Level::A keeps the lower triangle).
     const SparseMatrix* A_next = &h.A_fine;
+    SparseMatrix A_full;
     IndexVector dofs_next = h.fine_dofs;
     for (int k = q - 1; k >= 1; --k) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -323,6 +340,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             L.C_adapted.makeCompressed();
         }
         R = SparseMatrix();
+        L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
+        L.B.makeCompressed();
 
         // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node.
         const Index coarse_nodes = grid_nodes(L.cells, dim);
@@ -409,7 +428,11 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
         if (by_cell) Phi_present = product(L.C_adapted, Phi_present);
         L.build_seconds = seconds_since(t0);
-        A_next = &L.A;
+        if (k > 1) {
+            A_full = SparseMatrix();  // A^{k+1}: no longer needed
+            A_full = symmetric_from_lower(L.A);
+            A_next = &A_full;
+        }
         dofs_next = L.dofs;
     }
     return h;

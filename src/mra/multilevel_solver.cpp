@@ -18,7 +18,7 @@ void MultilevelSolver::factorize_level(int k) {
     auto& s = m_A[static_cast<std::size_t>(k - 1)];
     if (s) return;
     s = std::make_unique<solve::SpdSolver>();
-    s->compute(k == m_h.num_levels() ? m_h.A_fine : m_h.level(k).A);
+    s->compute(k == m_h.num_levels() ? m_h.A_fine : symmetric_from_lower(m_h.level(k).A));
 }
 
 void MultilevelSolver::factorize_wavelets(int k) {
@@ -26,7 +26,7 @@ void MultilevelSolver::factorize_wavelets(int k) {
     auto& s = m_B[static_cast<std::size_t>(k - 1)];
     if (s) return;
     s = std::make_unique<solve::SpdSolver>();
-    s->compute(L.B);
+    s->compute(symmetric_from_lower(L.B));
 }
 
 Vector MultilevelSolver::solve_levels(const Vector& g_fine, int m) {

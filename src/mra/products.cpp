@@ -142,9 +142,9 @@ SparseMatrix dense_product(const SparseMatrix& X, const SparseMatrix& Y) {
     return out;
 }
 
-/// The symmetric matrix whose lower triangle is that of M Y (M Y symmetric up to round-off),
-/// dense: block columns of the lower triangle in parallel (OpenMP), the upper one mirrored. Half
-/// the multiply-adds of M Y, on every thread (Eigen's own products run on one thread here).
+/// The lower triangle of M Y (M Y symmetric up to round-off), dense: block columns of the lower
+/// triangle in parallel (OpenMP). Half the multiply-adds of M Y, on every thread (Eigen's own
+/// products run on one thread here).
 SparseMatrix dense_lower_product(const SparseMatrix& M, const SparseMatrix& Y) {
     const Matrix Md(M), Yd(Y);
     const Index m = Md.rows();
@@ -154,8 +154,7 @@ SparseMatrix dense_lower_product(const SparseMatrix& M, const SparseMatrix& Y) {
         const Index nb = std::min(kDenseBlock, m - b);
         P.block(b, b, m - b, nb).noalias() = Md.bottomRows(m - b) * Yd.middleCols(b, nb);
     }
-    for (Index j = 1; j < m; ++j)
-        for (Index i = 0; i < j; ++i) P(i, j) = P(j, i);
+    for (Index j = 1; j < m; ++j) P.col(j).head(j).setZero();
     SparseMatrix out = P.sparseView(0.0, 0.0);
     out.makeCompressed();
     return out;
@@ -214,55 +213,30 @@ void accumulate(const SparseMatrix& S, RowAccumulator<W>& rows, RowAccumulator<W
     }
 }
 
-/// The symmetric matrix whose column j has, on and below the diagonal, rows[j] (sorted, all
-/// >= j) and values[j]; the upper triangle is their mirror image. Built in place (one count
-/// pass), without a transposed copy; empties rows and values column by column.
-SparseMatrix symmetric_from_lower_columns(std::vector<std::vector<Index>>& rows,
-                                          std::vector<std::vector<double>>& values) {
+/// The lower triangular matrix whose column j has rows[j] (sorted, all >= j) and values[j].
+/// Built in place; empties rows and values column by column.
+SparseMatrix lower_from_columns(std::vector<std::vector<Index>>& rows,
+                                std::vector<std::vector<double>>& values) {
     const Index m = static_cast<Index>(rows.size());
-    std::vector<Index> above(static_cast<std::size_t>(m), 0);  // entries above the diagonal
-    std::size_t nnz = 0;
-    for (Index j = 0; j < m; ++j)
-        for (const Index r : rows[static_cast<std::size_t>(j)]) {
-            ++nnz;
-            if (r > j) {
-                ++above[static_cast<std::size_t>(r)];
-                ++nnz;
-            }
-        }
     SparseMatrix S(m, m);
-    S.resizeNonZeros(static_cast<Index>(nnz));
     Index* outer = S.outerIndexPtr();
-    Index* inner = S.innerIndexPtr();
-    double* value = S.valuePtr();
     outer[0] = 0;
     for (Index j = 0; j < m; ++j)
-        outer[j + 1] = outer[j] + above[static_cast<std::size_t>(j)] +
-                       static_cast<Index>(rows[static_cast<std::size_t>(j)].size());
-    // Column j: its entries above the diagonal (rows i < j, from the lower columns i, met in
-    // increasing i), then its own lower column.
-    std::vector<Index> next(outer, outer + m);
+        outer[j + 1] = outer[j] + static_cast<Index>(rows[static_cast<std::size_t>(j)].size());
+    S.resizeNonZeros(outer[m]);
     for (Index j = 0; j < m; ++j) {
         auto& r = rows[static_cast<std::size_t>(j)];
         auto& v = values[static_cast<std::size_t>(j)];
-        Index k = outer[j + 1] - static_cast<Index>(r.size());
-        for (std::size_t e = 0; e < r.size(); ++e, ++k) {
-            inner[k] = r[e];
-            value[k] = v[e];
-            if (r[e] > j) {
-                Index& t = next[static_cast<std::size_t>(r[e])];
-                inner[t] = j;
-                value[t++] = v[e];
-            }
-        }
+        std::copy(r.begin(), r.end(), S.innerIndexPtr() + outer[j]);
+        std::copy(v.begin(), v.end(), S.valuePtr() + outer[j]);
         std::vector<Index>().swap(r);
         std::vector<double>().swap(v);
     }
     return S;
 }
 
-/// M X M^T (Mt = M^T): its lower triangle group by group of kernel width W (see congruence),
-/// mirrored.
+/// The lower triangle of M X M^T (Mt = M^T), group by group of kernel width W (see
+/// congruence).
 template <int W>
 SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& Mt,
                                 const SparseMatrix& X, const std::vector<IndexVector>& groups) {
@@ -300,7 +274,7 @@ SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& Mt,
             result.clear();
         }
     }
-    return symmetric_from_lower_columns(rows, values);
+    return lower_from_columns(rows, values);
 }
 
 }  // namespace

@@ -17,7 +17,7 @@ SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y);
 /// (M + M^T) / 2, compressed.
 SparseMatrix symmetrized(const SparseMatrix& M);
 
-/// M X M^T for symmetric X, exactly symmetric: the lower triangle is computed and mirrored.
+/// The lower triangle (diagonal included) of M X M^T for symmetric X (both triangles stored).
 ///
 /// `groups` partitions the rows of M (the columns of the result) into groups of rows with
 /// nearby supports, e.g. node_blocks of the coarse level. Unless M is at least half dense (then

@@ -26,10 +26,12 @@ struct LevelDiagnostics {
     /// NaN also where skipped (spectrum_skipped).
     double lambda_min_A = 0, lambda_max_A = 0, cond_A = 0;
     double lambda_min_B = 0, lambda_max_B = 0, cond_B = 0;
-    /// Fraction of zero entries (1 - stored nonzeros / (rows * cols)); explicitly stored zeros
-    /// count as zeros. sparsity_C is of C̃^k (NaN at level q).
+    /// Fraction of zero entries (1 - nonzeros / (rows * cols)) of the whole matrices (both
+    /// triangles of A^k and B^k); explicitly stored zeros count as zeros. sparsity_C is of C̃^k
+    /// (NaN at level q).
     double sparsity_A = 0, sparsity_B = 0, sparsity_C = 0;
-    /// Storage (storage_bytes); Φ^k and Ψ^k only where kept (Options::store_bases), else the
+    /// Storage (storage_bytes) as kept: A^k and B^k as their lower triangles (A^q whole); Φ^k
+    /// and Ψ^k only where kept (Options::store_bases), else the
     /// few bytes of an empty matrix.
     std::size_t bytes_Phi = 0, bytes_Psi = 0, bytes_C = 0, bytes_A = 0, bytes_B = 0;
     double build_seconds = 0;  ///< Level::build_seconds (0 at level q, which is not built)
