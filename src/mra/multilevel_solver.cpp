@@ -17,16 +17,21 @@ void MultilevelSolver::factorize_level(int k) {
               m_h.num_levels());
     auto& s = m_A[static_cast<std::size_t>(k - 1)];
     if (s) return;
-    s = std::make_unique<solve::SpdSolver>();
-    s->compute(k == m_h.num_levels() ? m_h.A_fine : symmetric_from_lower(m_h.level(k).A));
+    const bool fine = k == m_h.num_levels();
+    solve::SolverOptions options;
+    options.lower_triangle = !fine;  // Level::A holds the lower triangle of A^k
+    s = std::make_unique<solve::SpdSolver>(options);
+    s->compute(fine ? m_h.A_fine : m_h.level(k).A);
 }
 
 void MultilevelSolver::factorize_wavelets(int k) {
     const Level& L = m_h.level(k);
     auto& s = m_B[static_cast<std::size_t>(k - 1)];
     if (s) return;
-    s = std::make_unique<solve::SpdSolver>();
-    s->compute(symmetric_from_lower(L.B));
+    solve::SolverOptions options;
+    options.lower_triangle = true;  // Level::B holds the lower triangle of B^k
+    s = std::make_unique<solve::SpdSolver>(options);
+    s->compute(L.B);
 }
 
 Vector MultilevelSolver::solve_levels(const Vector& g_fine, int m) {

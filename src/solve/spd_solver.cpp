@@ -280,9 +280,10 @@ constexpr Index kParallelNonzeros = 200000;
 // 0.27-0.30 ms); the 1188-DOF one of 40x20x20 about 28 ms against 14-17 ms (dpotrf: 10 ms).
 constexpr double kDenseFraction = 0.9;
 
-bool is_dense(const SparseMatrix& A) {
+/// Whether over kDenseFraction of A's entries (of its lower triangle if `lower`) are stored.
+bool is_dense(const SparseMatrix& A, bool lower) {
     const double n = static_cast<double>(A.rows());
-    return static_cast<double>(A.nonZeros()) > kDenseFraction * n * n;
+    return static_cast<double>(A.nonZeros()) > kDenseFraction * (lower ? n * (n + 1) / 2 : n * n);
 }
 
 // Hash of the sparsity pattern: the sum of a mix of every entry's (row, column), so that the
@@ -348,6 +349,20 @@ void check_values(const SparseMatrix& A, const std::string& where) {
               "{}: the matrix is not symmetric: ||A - A^T|| / ||A|| = {:.3g} exceeds {:.0e} (both "
               "triangles must be stored)",
               where, rel, kSymmetryTolerance);
+}
+
+// Checks that a matrix given as its lower triangle (SolverOptions::lower_triangle) is finite
+// and has no entry above the diagonal.
+void check_lower_values(const SparseMatrix& A, const std::string& where) {
+    for (Index j = 0; j < A.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(A, j); it; ++it) {
+            CG_VERIFY(std::isfinite(it.value()),
+                      "{}: the matrix has a non-finite value (NaN or inf) in column {}", where, j);
+            CG_VERIFY(it.row() >= j,
+                      "{}: entry ({}, {}) lies above the diagonal, but the solver was told it gets "
+                      "the lower triangle only (lower_triangle)",
+                      where, it.row(), j);
+        }
 }
 
 // check_values for a dense copy D of the matrix, in tiles of kTile x kTile entries so that D's
@@ -468,10 +483,11 @@ struct SpdSolver::Impl {
         return {};
     }
 
-    /// Factorizes a dense A (both triangles stored) with LAPACK.
+    /// Factorizes a dense A with LAPACK (which reads the lower triangle).
     void factorize_dense(const SparseMatrix& A) {
         Matrix D = A;
-        if (options.check_input) check_dense_values(D, fmt::format("solver ({})", name()));
+        if (options.check_input && !options.lower_triangle)
+            check_dense_values(D, fmt::format("solver ({})", name()));
         const Index minor = dense_factor.compute(std::move(D));
         if (minor > 0) {
             not_positive_definite(fmt::format(
@@ -498,7 +514,8 @@ struct SpdSolver::Impl {
                     "the solve with the factorization overflows; pivot ratio {:.3g}", pivot_ratio));
             }
             z /= norm;
-            rho = z.dot(A * z);
+            rho = options.lower_triangle ? z.dot(A.selfadjointView<Eigen::Lower>() * z)
+                                         : z.dot(A * z);
         }
         const double scale = A.diagonal().maxCoeff();
         if (!(rho > kSingularEigenvalueRatio * scale)) {
@@ -534,7 +551,7 @@ void SpdSolver::analyze(const SparseMatrix& A) {
     s.analyzed = s.factorized = false;
     s.n = static_cast<Index>(A.rows());
     s.nnz = A.nonZeros();
-    s.dense = s.options.backend == Backend::Cholmod && is_dense(A);
+    s.dense = s.options.backend == Backend::Cholmod && is_dense(A, s.options.lower_triangle);
     s.pattern = s.dense ? 0 : pattern_hash(A);
     switch (s.options.backend) {
         case Backend::Cholmod: {
@@ -581,9 +598,10 @@ void SpdSolver::analyze(const SparseMatrix& A) {
 void SpdSolver::factorize(const SparseMatrix& A) {
     Impl& s = *m_impl;
     // A dense matrix has no pattern to analyze: its order is kept whatever its zeros.
-    const bool same_pattern =
-        s.analyzed && A.rows() == s.n && A.cols() == s.n && A.isCompressed() &&
-        (s.dense ? is_dense(A) : A.nonZeros() == s.nnz && pattern_hash(A) == s.pattern);
+    const bool same_pattern = s.analyzed && A.rows() == s.n && A.cols() == s.n &&
+                              A.isCompressed() &&
+                              (s.dense ? is_dense(A, s.options.lower_triangle)
+                                       : A.nonZeros() == s.nnz && pattern_hash(A) == s.pattern);
     if (!same_pattern) analyze(A);
     factorize_analyzed(A);
 }
@@ -591,7 +609,13 @@ void SpdSolver::factorize(const SparseMatrix& A) {
 void SpdSolver::factorize_analyzed(const SparseMatrix& A) {
     Impl& s = *m_impl;
     s.factorized = false;
-    if (!s.dense && s.options.check_input) check_values(A, fmt::format("solver ({})", s.name()));
+    if (s.options.check_input) {
+        const std::string where = fmt::format("solver ({})", s.name());
+        if (s.options.lower_triangle)
+            check_lower_values(A, where);
+        else if (!s.dense)
+            check_values(A, where);
+    }
 
     switch (s.options.backend) {
         case Backend::Cholmod: {
@@ -640,7 +664,8 @@ void SpdSolver::factorize_analyzed(const SparseMatrix& A) {
                 s.not_positive_definite(
                     fmt::format("diagonal entry {} is {:.3g}, not positive", at, dmin));
             }
-            s.cg_matrix = A;
+            s.cg_matrix =
+                s.options.lower_triangle ? SparseMatrix(A.selfadjointView<Eigen::Lower>()) : A;
             s.cg->setTolerance(s.options.cg_tolerance);
             s.cg->setMaxIterations(s.options.cg_max_iterations > 0 ? s.options.cg_max_iterations
                                                                    : 10 * s.n);

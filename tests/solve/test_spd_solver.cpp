@@ -598,3 +598,54 @@ TEST(SpdSolver, KeepOrderFactorizesInTheCallersAmdOrder) {
     const Vector x = reference.solve(b);
     for (Index k = 0; k < n; ++k) EXPECT_NEAR(px[k], x[perm[k]], 1e-12 * x.norm());
 }
+
+// lower_triangle: every backend, sparse and dense (CHOLMOD's LAPACK path), solves with the
+// lower triangle alone as with both triangles (1e-10 relative, as BackendsAgreeOnRandomSpd-
+// Matrices: CG's 1e-12 residual at condition numbers about 20); an entry above the diagonal is
+// an input error; a singular matrix given so is still reported, also by the Rayleigh quotient
+// that needs both triangles (singular Laplacians that factor with a round-off pivot).
+TEST(SpdSolver, LowerTriangleAloneSolvesLikeTheWholeMatrix) {
+    const auto lower = [](const SparseMatrix& A) {
+        SparseMatrix L = A.triangularView<Eigen::Lower>();
+        L.makeCompressed();
+        return L;
+    };
+    const auto options = [](Backend b) {
+        solve::SolverOptions o;
+        o.backend = b;
+        o.lower_triangle = true;
+        return o;
+    };
+    const Matrix X = random_matrix(80, 80, 41);
+    const Matrix Dense = X * X.transpose() + 80.0 * Matrix::Identity(80, 80);
+    SparseMatrix D = Dense.sparseView();
+    D.makeCompressed();
+    for (const SparseMatrix& A : {shifted(random_graph_laplacian(600, 3, 42), 1.0), D}) {
+        const Matrix B = random_matrix(A.rows(), 3, 43);
+        solve::SpdSolver whole;
+        whole.compute(A);
+        const Matrix x = whole.solve(B);
+        for (const Backend b : kAll) {
+            solve::SpdSolver solver(options(b));
+            solver.compute(lower(A));
+            EXPECT_LT((solver.solve(B) - x).norm(), 1e-10 * x.norm())
+                << solve::backend_name(b) << " n = " << A.rows();
+        }
+        solve::SpdSolver strict(options(Backend::Cholmod));
+        EXPECT_THROW(strict.compute(A), Error) << "n = " << A.rows();
+    }
+    for (double scale : {1e-8, 1.0, 1e8}) {
+        int numerically_singular = 0;
+        for (unsigned seed = 0; seed < 4; ++seed) {
+            solve::SpdSolver solver(options(Backend::Cholmod));
+            try {
+                solver.compute(lower(scale * grid_laplacian(12, 3, 6.0, seed)));
+                ADD_FAILURE() << "a singular matrix was accepted, scale " << scale;
+            } catch (const NotPositiveDefinite& e) {
+                numerically_singular +=
+                    std::string(e.what()).find("numerically singular") != std::string::npos;
+            }
+        }
+        EXPECT_GE(numerically_singular, 1) << scale;
+    }
+}

@@ -49,6 +49,11 @@ struct SolverOptions {
     /// where the check took 5% of the time (40x20x20 hex checker, rho = 5). A non-finite
     /// value then shows up as a failed or numerically singular factorization.
     bool check_input = true;
+    /// A holds only its lower triangle, diagonal included (as mra::Level::A and B keep A^k and
+    /// B^k): no copy of the other triangle is made. With check_input, an entry above the
+    /// diagonal is an error. Node blocks (node_dofs > 1) are not detected in a lower triangle,
+    /// so CHOLMOD's default ordering is used.
+    bool lower_triangle = false;
 };
 
 /// Symbolic statistics of a CHOLMOD analysis.
@@ -97,7 +102,8 @@ IndexVector amd_order(const SparseMatrix& A);
 /// returning garbage.
 ///
 /// The matrix must be compressed and hold both triangles (the direct backends read the lower
-/// one); symmetry is checked as ||A - A^T||_F <= 1e-10 ||A||_F.
+/// one; SolverOptions::lower_triangle takes that one alone); symmetry is checked as
+/// ||A - A^T||_F <= 1e-10 ||A||_F.
 ///
 /// Positive definiteness: a failed Cholesky (CHOLMOD) or a non-positive LDL^T pivot is
 /// reported directly. A singular matrix may also factor "successfully" with a round-off pivot;
