@@ -227,6 +227,8 @@
 /// (d) session 13: local systems built in their AMD order and factorized in place (no
 /// permuted transposes inside CHOLMOD), no per-system symmetry check, CHOLMOD with symbolic
 /// reuse from 100 unknowns instead of Eigen's simplicial LLT below 1000, dense ones by LAPACK.
+/// (e) session 14: A^k and B^k kept as their lower triangles, the Galerkin product assembling
+/// only that one (storage: C̃ 22.2M entries, A^1 10.6M, B 3.8M at patch 1).
 /// Peak = the bench's high-water mark (fine problem and its solve included; (c) patch 2 was
 /// measured before the last two changes, which took patch 1 from 1393 to 1261 MB).
 ///
@@ -239,17 +241,23 @@
 /// | 2     | (c) | 22.0    | 10.2     | 7.7   | 771        | 1848    | 0.48           |
 /// | 1     | (d) | 29.1-30.1 | 22.0-22.3 | 4.2  | 611        | 1272    | 0.58           |
 /// | 2     | (d) | 22.6    | 10.9     | 7.0   | 771        | 1848    | 0.48           |
+/// | 1     | (e) | 28.7-33.7 | 21.4-25.2 | 4.0-4.7 | 439      | 1225-1272 | 0.58         |
+/// | 2     | (e) | 20.6    | 9.3      | 6.5   | 580        | 1848    | 0.48           |
 ///
 /// Growth with the grid (same setting, patch 1; nodes: build s, storage MB): (c) 1,377: 1.9,
 /// 22; 4,225: 9.6, 101; 9,537: 19.7, 284; 18,081: 39.7, 611; (d) 1.3, 5.9, 14.1, 29.1 s. From
 /// 4,225 to 18,081 nodes (4.3x) the build grows 4.9x, close to linear (small grids clip most
 /// regions at the boundary, so their systems are smaller).
-/// 64^3 cells (274,625 nodes), two levels, rho = 2 fine rings: build 146.5 s in (d) (local
-/// solves 64.4 s, A^1 30.2 s, B 23.9 s, C̃ = C^† + Z W 15.6 s, invariance 7.7 s; (c): 298.6 s,
-/// local solves 207 s), storage 5.2 GB (C̃ 1.1e8 entries, A^1 1.9e8, B 1.3e8), peak 10.6 GB
-/// from the start of the build, ~4.6 GB of it the bench's fine problem. At rho = 5, A^1 alone
-/// would need ~8.5 GB. The regions' order: METIS instead of AMD took the solves of (d) at
-/// 40x20x20 from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s; AMD stays.
+/// 64^3 cells (274,625 nodes), two levels, rho = 2 fine rings: build 129.8 s in (e) (local
+/// solves 62.1 s, B 25.5 s, A^1 17.8 s, C̃ = C^† + Z W 10.6 s, invariance 6.7 s; (d): 146.5 s
+/// with A^1 30.2 s; (c): 298.6 s, local solves 207 s), storage 3.3 GB in (e) (C̃ 1.1e8 entries,
+/// lower triangles of A^1 9.6e7 and B 6.6e7), 5.2 GB in (d); peak 9.9 GB from the start of
+/// the build (10.6 GB in (d)), ~4.6 GB of it the bench's fine problem. Coarsest factorize +
+/// solve 192 s + 0.67 s against 218 s + 1.0 s for the fine one (1.1x; A^1 is 107,811 DOFs with
+/// 1.9e8 nonzeros); coarsest error 0.72. At rho = 5, A^1's lower triangle alone would need
+/// ~4.3 GB and C̃ ~3.8 GB: over 8 GB. The regions' order: METIS instead of AMD took the solves
+/// of (d) at 40x20x20 from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s; AMD
+/// stays.
 /// Where the time goes at patch 1 (perf, (d)): the 2,541 local CHOLMOD factorizations (~3,500
 /// unknowns, 2e8 flops each) are mostly BLAS (dgemm and its copies: ~35% of the build's CPU
 /// time); CHOLMOD's permuted transposes of the input, 25% of the solves in (c), are gone, and
@@ -457,7 +465,7 @@ std::size_t storage_bytes(const SparseMatrix& M);
 
 /// The symmetric matrix whose lower triangle (diagonal included) `lower` holds, both triangles
 /// stored (as SpdSolver and the products take it). Level::A and Level::B are stored as their
-/// lower triangles: at 40x20x20 hexes, rho = 5, the two-level hierarchy's storage is 440 MB
+/// lower triangles: at 40x20x20 hexes, rho = 5, the two-level hierarchy's storage is 439 MB
 /// instead of 611 MB.
 SparseMatrix symmetric_from_lower(const SparseMatrix& lower);
 
