@@ -176,6 +176,7 @@ class RowAccumulator {
         }
         return values_.data() + static_cast<std::size_t>(p) * W;
     }
+    bool has(Index key) const { return position_[static_cast<std::size_t>(key)] >= 0; }
     const double* existing_row(Index key) const {
         return values_.data() +
                static_cast<std::size_t>(position_[static_cast<std::size_t>(key)]) * W;
@@ -211,6 +212,45 @@ void accumulate(const SparseMatrix& S, RowAccumulator<W>& rows, RowAccumulator<W
             for (int c = 0; c < W; ++c) a[c] += *v * p[c];
         }
     }
+}
+
+/// acc[i, :] = sum_f St[f, i] rows[f, :] over the keys f of `rows`, for every column i >=
+/// first_row of St (a row of S = St^T) that meets a key: row by row, each kept in registers.
+template <int W>
+void accumulate_rows(const SparseMatrix& St, const RowAccumulator<W>& rows, RowAccumulator<W>& acc,
+                     Index first_row) {
+    const Index* outer = St.outerIndexPtr();
+    const Index* inner = St.innerIndexPtr();
+    const double* value = St.valuePtr();
+    for (Index i = first_row; i < St.outerSize(); ++i) {
+        double sum[W] = {};
+        bool met = false;
+        for (Index k = outer[i]; k < outer[i + 1]; ++k) {
+            if (!rows.has(inner[k])) continue;
+            const double* p = rows.existing_row(inner[k]);
+            const double v = value[k];
+            for (int c = 0; c < W; ++c) sum[c] += v * p[c];
+            met = true;
+        }
+        if (met) std::copy(sum, sum + W, acc.row(i));
+    }
+}
+
+/// Whether M's rows from first_row on (accumulate_rows) are cheaper to scan for (M xmt)[first_row:,
+/// :] than M's columns at the keys of xmt (accumulate): when at least half of the rows' entries
+/// meet a key. Every entry met costs the same multiply-adds either way, but the columns add
+/// them to a row of the result in memory and the rows in registers.
+template <int W>
+bool by_rows(const SparseMatrix& M, const SparseMatrix& Mt, RowAccumulator<W>& xmt, Index first) {
+    const Index* outer = M.outerIndexPtr();
+    const Index* inner = M.innerIndexPtr();
+    double met = 0;
+    for (const Index f : xmt.keys())
+        met += static_cast<double>(inner + outer[f + 1] -
+                                   std::lower_bound(inner + outer[f], inner + outer[f + 1], first));
+    const double scanned =
+        static_cast<double>(Mt.outerIndexPtr()[Mt.outerSize()] - Mt.outerIndexPtr()[first]);
+    return scanned <= 2 * met;
 }
 
 /// The lower triangular matrix whose column j has rows[j] (sorted, all >= j) and values[j].
@@ -255,7 +295,11 @@ SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& Mt,
                 for (SparseMatrix::InnerIterator it(Mt, J[c]); it; ++it)
                     mt.row(static_cast<Index>(it.row()))[c] = it.value();
             accumulate(X, mt, xmt, 0);
-            accumulate(M, xmt, result, J.minCoeff());
+            const Index first = J.minCoeff();
+            if (by_rows(M, Mt, xmt, first))
+                accumulate_rows(Mt, xmt, result, first);
+            else
+                accumulate(M, xmt, result, first);
             sorted = result.keys();
             std::sort(sorted.begin(), sorted.end());
             for (Index c = 0; c < J.size(); ++c) {

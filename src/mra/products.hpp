@@ -23,11 +23,14 @@ SparseMatrix symmetrized(const SparseMatrix& M);
 /// nearby supports, e.g. node_blocks of the coarse level. Unless M is at least half dense (then
 /// the product is dense, in parallel), each group J of at most kMaxGroup rows is done at once: (X
 /// M^T)[:, J] is accumulated densely over the union of the supports of M's rows J, then M (X
-/// M^T)[:, J]. Every column of M is read once per group instead of once per row of M, and the inner
-/// loops are dense |J|-wide multiply-adds: on a 40x20x20 hex grid after localized solves (rho = 5
+/// M^T)[:, J], by M's columns at that union or, where at least half of the entries scanned meet
+/// it (dense-ish M, e.g. after global solves), by M's rows with each result row in registers.
+/// Every column of M is read once per group instead of once per row of M, and the inner loops
+/// are dense |J|-wide multiply-adds: on a 40x20x20 hex grid after localized solves (rho = 5
 /// fine rings, C̃ with 22M entries, A^1 36% dense, 2 threads) A^1 took 6.6 s and 1.4 GB peak,
 /// against 17.9 s and 2.2 GB for column-by-column Gustavson products, which stream C̃ from memory
-/// once per column of the result and hold X M^T.
+/// once per column of the result and hold X M^T. With global solves there (C̃ 132M entries, 32%
+/// dense, too large for the dense product) A^1 took 97.7 s by columns and 80.6 s with the rows.
 SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
                         const std::vector<IndexVector>& groups);
 

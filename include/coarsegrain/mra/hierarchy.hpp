@@ -244,11 +244,12 @@
 /// | 1     | (e) | 28.7-33.7 | 21.4-25.2 | 4.0-4.7 | 439      | 1225-1272 | 0.58         |
 /// | 2     | (e) | 20.6    | 9.3      | 6.5   | 580        | 1848    | 0.48           |
 ///
-/// Global solves (the accurate default, radius inf) in the same setting, (e): build 156.3 s
-/// (factorization of B and solves 57.1 s, A^1 97.7 s), storage 1.97 GB (C̃ 132M entries, 32%
-/// dense; A^1 98% dense), peak 5.8 GB, coarsest error 0.1716 against 0.58 at rho = 5. C̃ is too
-/// large for the dense product (kDenseProductMaxEntries), and the grouped one streams its
-/// columns once per group of 24 rows: ~6 GFlop/s per core, bound by memory.
+/// Global solves (the accurate default, radius inf) in the same setting: build 137.8 s
+/// (factorization of B and solves 55.7 s, A^1 80.6 s; 156.3 s with A^1 97.7 s before the
+/// product read dense-ish C̃ by rows), storage 1.97 GB (C̃ 132M entries, 32% dense; A^1 98%
+/// dense), peak 5.8 GB, coarsest error 0.1716 against 0.58 at rho = 5. C̃ is too large for the
+/// dense product (kDenseProductMaxEntries), and the grouped one streams it once per group of
+/// 24 rows: ~7 GFlop/s per core, bound by memory.
 /// Growth with the grid (same setting, patch 1; nodes: build s, storage MB): (c) 1,377: 1.9,
 /// 22; 4,225: 9.6, 101; 9,537: 19.7, 284; 18,081: 39.7, 611; (d) 1.3, 5.9, 14.1, 29.1 s. From
 /// 4,225 to 18,081 nodes (4.3x) the build grows 4.9x, close to linear (small grids clip most
