@@ -31,8 +31,7 @@ struct LevelDiagnostics {
     /// (NaN at level q).
     double sparsity_A = 0, sparsity_B = 0, sparsity_C = 0;
     /// Storage (storage_bytes) as kept: A^k and B^k as their lower triangles (A^q whole); Φ^k
-    /// and Ψ^k only where kept (Options::store_bases), else the
-    /// few bytes of an empty matrix.
+    /// and Ψ^k only where kept (Options::store_bases), else the few bytes of an empty matrix.
     std::size_t bytes_Phi = 0, bytes_Psi = 0, bytes_C = 0, bytes_A = 0, bytes_B = 0;
     double build_seconds = 0;  ///< Level::build_seconds (0 at level q, which is not built)
     /// The spectrum of A^k or B^k was not computed: more rows than max_spectrum_dofs, or
