@@ -14,10 +14,15 @@ case "$flavour" in
   *) echo "usage: scripts/build.sh [release|asan] [targets...]" >&2; exit 2 ;;
 esac
 # ccache (installed by setup.sh) makes rebuilds in fresh clones and git worktrees cheap;
-# CCACHE_BASEDIR lets checkouts in different folders share hits.
+# CCACHE_BASEDIR lets checkouts in different folders share hits. The asan flavour compiles
+# with -g1, for which ccache also hashes the build folder (so that the debug info names it):
+# CCACHE_NOHASHDIR drops that, or every fresh clone recompiled the whole instrumented build
+# (10 of the test command's 17 minutes); a hit then names another checkout's build folder in
+# its debug info, which ASan's reports do not need.
 if command -v ccache >/dev/null; then
   flags+=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
   export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
+  if [ "$flavour" = asan ]; then export CCACHE_NOHASHDIR=true; fi
 fi
 if [ ! -f "$dir/build.ninja" ]; then
   cmake -S . -B "$dir" -G Ninja "${flags[@]}" >/dev/null
