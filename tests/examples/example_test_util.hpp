@@ -3,14 +3,10 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
-#include <vector>
 
 #include "test_util.hpp"
 
@@ -91,46 +87,6 @@ inline ExampleRun run_example(const std::string& name, const nlohmann::json& pat
         r.summary = nlohmann::json::parse(s);
     }
     return r;
-}
-
-/// Fig. 16 examples (composite_stress, composite_fibres): relative L2 error of the coarsest level's
-/// stress over the softest material (the elements of the smallest E), from the method's
-/// coarsest_stress.csv (columns x, y, area, E, fine_xx, fine_yy, fine_xy, fine_von_mises,
-/// coarse_xx, coarse_yy, coarse_xy, coarse_von_mises).
-inline double stress_soft_error(const ExampleRun& r, const std::string& method) {
-    std::ifstream in(r.out + "/" + method + "/coarsest_stress.csv");
-    std::string line;
-    std::getline(in, line);
-    std::vector<std::vector<double>> rows;
-    double E_min = 1e300;
-    while (std::getline(in, line)) {
-        std::vector<double> v;
-        std::stringstream cells(line);
-        for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::stod(cell));
-        EXPECT_EQ(v.size(), 12u) << line;
-        if (v.size() != 12u) return 1e300;
-        E_min = std::min(E_min, v[3]);
-        rows.push_back(v);
-    }
-    EXPECT_GT(rows.size(), 0u) << method << "/coarsest_stress.csv";
-    double diff2 = 0, norm2 = 0;
-    for (const std::vector<double>& v : rows) {
-        if (v[3] != E_min) continue;
-        const auto frobenius2 = [](double xx, double yy, double xy) {
-            return xx * xx + yy * yy + 2 * xy * xy;
-        };
-        norm2 += v[2] * frobenius2(v[4], v[5], v[6]);
-        diff2 += v[2] * frobenius2(v[8] - v[4], v[9] - v[5], v[10] - v[6]);
-    }
-    return norm2 > 0 ? std::sqrt(diff2 / norm2) : 1e300;
-}
-
-/// The smallest l2 error of the baselines on the same 4 coarse nodes (2 triangles).
-inline double stress_best_baseline_l2(const ExampleRun& r) {
-    double best = 1e300;
-    for (const char* m : {"effective-tensor", "naive", "voigt", "reuss"})
-        best = std::min(best, r.error(m, "l2_rel"));
-    return best;
 }
 
 }  // namespace coarsegrain::test
