@@ -45,9 +45,10 @@ struct Row {
     int rings_max = 0;
 };
 
-double density(const cg::SparseMatrix& M) {
-    return static_cast<double>(M.nonZeros()) /
-           (static_cast<double>(M.rows()) * static_cast<double>(M.cols()));
+template <class M>
+double density(const M& m) {
+    return static_cast<double>(m.nonZeros()) /
+           (static_cast<double>(m.rows()) * static_cast<double>(m.cols()));
 }
 
 Row evaluate(const cg::test::GridProblem& p, const Options& o) {
@@ -65,8 +66,8 @@ Row evaluate(const cg::test::GridProblem& p, const Options& o) {
         static_cast<double>(cg::mra::symmetric_nonzeros(h.level(1).A)) /
         (static_cast<double>(h.level(1).A.rows()) * static_cast<double>(h.level(1).A.rows()));
     const cg::SparseMatrix AWt = h.A_fine * cg::SparseMatrix(F.W.transpose());
-    r.defect =
-        cg::SparseMatrix(F.C_adapted * AWt).norm() / cg::SparseMatrix(F.C_dagger * AWt).norm();
+    r.defect = cg::SparseMatrix(F.C_adapted.sparse() * AWt).norm() /
+               cg::SparseMatrix(F.C_dagger * AWt).norm();
     int count = 0;
     for (const int k : F.region_rings)
         if (k > 0) {

@@ -152,8 +152,9 @@ void add_stress_map(const scene::FineModel& fine, const Vector& u1, const Vector
                        {"coarsest_stress.png"}});
 }
 
-double density(const SparseMatrix& M, Index nonzeros) {
-    const double size = static_cast<double>(M.rows()) * static_cast<double>(M.cols());
+template <class M>
+double density(const M& m, std::int64_t nonzeros) {
+    const double size = static_cast<double>(m.rows()) * static_cast<double>(m.cols());
     return size > 0 ? static_cast<double>(nonzeros) / size : 0.0;
 }
 

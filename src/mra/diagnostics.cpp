@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/io/file_util.hpp"
@@ -78,6 +79,15 @@ Spectrum level_spectrum(const SparseMatrix& M, bool lower, const char* name, Ind
     return {nan, nan};
 }
 
+/// Fraction of zeros of a rows x cols matrix whose stored values are `values`.
+double zero_fraction(Index rows, Index cols, std::span<const double> values) {
+    const double size = static_cast<double>(rows) * static_cast<double>(cols);
+    if (size == 0) return 0;
+    const auto nonzero =
+        std::count_if(values.begin(), values.end(), [](double v) { return v != 0; });
+    return 1.0 - static_cast<double>(nonzero) / size;
+}
+
 /// sparsity() of the symmetric matrix whose lower triangle `lower` holds.
 double symmetric_sparsity(const SparseMatrix& lower) {
     const double size = static_cast<double>(lower.rows()) * static_cast<double>(lower.cols());
@@ -104,13 +114,11 @@ Spectrum extreme_eigenvalues(const SparseMatrix& A) {
 }
 
 double sparsity(const SparseMatrix& M) {
-    const double size = static_cast<double>(M.rows()) * static_cast<double>(M.cols());
-    if (size == 0) return 0;
-    Index nonzero = 0;
-    for (Index i = 0; i < M.nonZeros(); ++i)
-        if (M.valuePtr()[i] != 0) ++nonzero;
-    return 1.0 - static_cast<double>(nonzero) / size;
+    return zero_fraction(M.rows(), M.cols(),
+                         {M.valuePtr(), static_cast<std::size_t>(M.nonZeros())});
 }
+
+double sparsity(const RunMatrix& M) { return zero_fraction(M.rows(), M.cols(), M.values()); }
 
 Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOptions& options) {
     CG_VERIFY(g_fine.size() == h.fine_grid_dofs(),

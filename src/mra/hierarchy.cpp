@@ -314,10 +314,10 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                 R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
         }
         const int rings = std::isinf(L.radius) ? 0 : to_rings(L.radius);
+        SparseMatrix Ct;  // C̃^k while it is built and used here; kept as L.C_adapted (runs)
         if (std::isinf(L.radius)) {
             const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
-            L.C_adapted =
-                detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation);
+            Ct = detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation);
         } else {
             SparseMatrix Z;
             if (by_cell) {
@@ -336,8 +336,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                 L.region_rings = std::move(lz.rings);
             }
             const Phase phase(tag + "C adapted", &h.timings);
-            L.C_adapted = L.C_dagger + product(Z, L.W);
-            L.C_adapted.makeCompressed();
+            Ct = L.C_dagger + product(Z, L.W);
+            Ct.makeCompressed();
         }
         R = SparseMatrix();
         L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
@@ -358,7 +358,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
 
         if (options.truncation > 0) {
             const Phase phase(tag + "truncation", &h.timings);
-            detail::truncate_rows(L.C_adapted, options.truncation);
+            detail::truncate_rows(Ct, options.truncation);
         }
         if (options.invariance) {
             const Phase phase(tag + "invariance", &h.timings);
@@ -375,8 +375,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             for (Index j = 0; j < fine_count; ++j)
                 if (present_count[static_cast<std::size_t>(j)] != dim)
                     skip[static_cast<std::size_t>(j)] = 1;
-            for (Index l = 0; l < L.C_adapted.outerSize(); ++l)
-                for (SparseMatrix::InnerIterator it(L.C_adapted, l); it; ++it)
+            for (Index l = 0; l < Ct.outerSize(); ++l)
+                for (SparseMatrix::InnerIterator it(Ct, l); it; ++it)
                     if (L.dirichlet_nodes[static_cast<std::size_t>(L.dofs[it.row()] / dim)])
                         skip[static_cast<std::size_t>(dofs_next[l] / dim)] = 1;
             std::vector<int> kept_count(static_cast<std::size_t>(coarse_nodes), 0);
@@ -408,8 +408,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                             skip[static_cast<std::size_t>(x + nf[0] * (y + nf[1] * z))] = 1;
             }
             const Matrix rig = L.C * rig_next;
-            L.invariance_applied = detail::correct_invariance(L.C_adapted, g, skip, rig, rig_next,
-                                                              positions, rotation_scale);
+            L.invariance_applied =
+                detail::correct_invariance(Ct, g, skip, rig, rig_next, positions, rotation_scale);
             rig_next = rig;
         } else {
             L.invariance_applied.assign(static_cast<std::size_t>(grid_nodes(fine_cells, dim)), 0);
@@ -417,16 +417,18 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
         {
             const Phase phase(tag + "A", &h.timings);
-            L.A = detail::congruence(L.C_adapted, A,
+            L.A = detail::congruence(Ct, A,
                                      detail::node_blocks(L.dofs, L.cells, dim, kGroupSide[dim]));
         }
         if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);
             L.Psi = product(L.W, Phi);
-            L.Phi = product(L.C_adapted, Phi);
+            L.Phi = product(Ct, Phi);
             Phi = L.Phi;
         }
-        if (by_cell) Phi_present = product(L.C_adapted, Phi_present);
+        if (by_cell) Phi_present = product(Ct, Phi_present);
+        L.C_adapted = RunMatrix(Ct);
+        Ct = SparseMatrix();
         L.build_seconds = seconds_since(t0);
         if (k > 1) {
             A_full = SparseMatrix();  // A^{k+1}: no longer needed
@@ -443,7 +445,7 @@ SparseMatrix basis(const Hierarchy& h, int k) {
     CG_VERIFY(k >= 1 && k <= q, "mra: level {} out of range 1..{}", k, q);
     if (k < q && h.options.store_bases) return h.level(k).Phi;
     SparseMatrix Phi = fine_selection(h);
-    for (int l = q - 1; l >= k; --l) Phi = product(h.level(l).C_adapted, Phi);
+    for (int l = q - 1; l >= k; --l) Phi = product(h.level(l).C_adapted.sparse(), Phi);
     return Phi;
 }
 
@@ -454,7 +456,7 @@ Vector reconstruct(const Hierarchy& h, const Vector& u_k, int k) {
     CG_VERIFY(u_k.size() == n, "mra: {} coefficients for the {} DOFs of level {}", u_k.size(), n,
               k);
     Vector u = u_k;
-    for (int l = k; l < q; ++l) u = h.level(l).C_adapted.transpose() * u;
+    for (int l = k; l < q; ++l) u = h.level(l).C_adapted.transpose_times(u);
     Vector out = Vector::Zero(h.fine_grid_dofs());
     for (Index i = 0; i < h.fine_dofs.size(); ++i) out[h.fine_dofs[i]] = u[i];
     return out;

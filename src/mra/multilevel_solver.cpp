@@ -51,7 +51,7 @@ Vector MultilevelSolver::solve_levels(const Vector& g_fine, int m) {
     Vector u = m_A[0]->solve(g);
     for (int k = 1; k < q; ++k) {
         const Level& L = m_h.level(k);
-        u = L.C_adapted.transpose() * u;
+        u = L.C_adapted.transpose_times(u);
         if (k < m) {
             factorize_wavelets(k);
             u += L.W.transpose() *

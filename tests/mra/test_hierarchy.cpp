@@ -39,14 +39,14 @@ TEST_P(MraGlobal, AdaptedRefinementSatisfiesEq9AndEq12) {
         const Level& L = h.level(k);
         // Eq. 9 constraint C̃ C^T = I: C̃ = C† + Z W with C† C^T = I and W C^T = 0 exactly, so
         // only the round-off of Z W C^T remains (|Z| <= ~10, sums of ~100 terms): 1e-12.
-        const Matrix CtCt = Matrix(L.C_adapted * SparseMatrix(L.C.transpose()));
+        const Matrix CtCt = Matrix(L.C_adapted.sparse() * SparseMatrix(L.C.transpose()));
         EXPECT_LT((CtCt - Matrix::Identity(CtCt.rows(), CtCt.cols())).cwiseAbs().maxCoeff(), 1e-12)
             << "level " << k;
         // Eq. 12: C̃ A W^T = 0, relative to |C̃| |A| |W| (Frobenius). The global solve with
         // B = W A W^T leaves the round-off of a CHOLMOD solve of a matrix with condition
         // number below ~1e6: 1e-10.
-        const Matrix CAWt = Matrix(L.C_adapted * (*A) * SparseMatrix(L.W.transpose()));
-        const double scale = L.C_adapted.norm() * A->norm() * L.W.norm();
+        const Matrix CAWt = Matrix(L.C_adapted.sparse() * (*A) * SparseMatrix(L.W.transpose()));
+        const double scale = L.C_adapted.sparse().norm() * A->norm() * L.W.norm();
         EXPECT_LT(CAWt.norm(), 1e-10 * scale) << "level " << k;
         A_level = symmetric_from_lower(L.A);
         A = &A_level;
@@ -135,7 +135,8 @@ TEST(MraClosedForm, AdaptedRefinementIsTheConstrainedMinimizer) {
         const Matrix AinvCt = llt.solve(C.transpose());
         const Matrix M = (C * AinvCt).llt().solve(AinvCt.transpose());
         // Dense solves with a ~1e4 condition number on 90 unknowns: 1e-10.
-        EXPECT_LT((Matrix(L.C_adapted) - M).cwiseAbs().maxCoeff(), 1e-10) << refinement_name(r);
+        EXPECT_LT((Matrix(L.C_adapted.sparse()) - M).cwiseAbs().maxCoeff(), 1e-10)
+            << refinement_name(r);
         // A^1 = C̃ A C̃^T equals (C A^{-1} C^T)^{-1} then.
         const Matrix A1 = (C * AinvCt).inverse();
         EXPECT_LT((Matrix(symmetric_from_lower(L.A)) - A1).norm(), 1e-10 * A1.norm())

@@ -21,7 +21,7 @@ std::string param_name(const ::testing::TestParamInfo<LocalizedParam>& p) {
 /// C̃^k of two hierarchies agree entry by entry on every level to `tol`.
 void expect_same_refinements(const Hierarchy& a, const Hierarchy& b, double tol) {
     for (int k = 1; k < a.num_levels(); ++k) {
-        const Matrix dC = Matrix(a.level(k).C_adapted - b.level(k).C_adapted);
+        const Matrix dC = Matrix(a.level(k).C_adapted.sparse() - b.level(k).C_adapted.sparse());
         EXPECT_LT(dC.cwiseAbs().maxCoeff(), tol) << "level " << k;
     }
 }
@@ -46,7 +46,8 @@ TEST_P(MraLocalized, RadiusCoveringTheGridEqualsGlobalSolves) {
         for (int k = 1; k < hg.num_levels(); ++k) {
             // Same systems, solved by CHOLMOD (global) and by the local sparse / dense Cholesky:
             // round-off of two solves with condition numbers below ~1e6: 1e-10.
-            const Matrix dC = Matrix(hg.level(k).C_adapted - hl.level(k).C_adapted);
+            const Matrix dC =
+                Matrix(hg.level(k).C_adapted.sparse() - hl.level(k).C_adapted.sparse());
             EXPECT_LT(dC.cwiseAbs().maxCoeff(), 1e-10) << "level " << k;
             EXPECT_LT((hg.level(k).A - hl.level(k).A).norm(), 1e-10 * hg.level(k).A.norm())
                 << "level " << k;
@@ -130,8 +131,9 @@ std::vector<char> exact_nodes(const Hierarchy& h, int k) {
         const Level& L = h.level(m);
         const IndexVector& fine = m + 1 == h.num_levels() ? h.fine_dofs : h.level(m + 1).dofs;
         std::vector<char> next(L.invariance_applied);
-        for (Index l = 0; l < L.C_adapted.outerSize(); ++l)
-            for (SparseMatrix::InnerIterator it(L.C_adapted, l); it; ++it)
+        const SparseMatrix C = L.C_adapted.sparse();
+        for (Index l = 0; l < C.outerSize(); ++l)
+            for (SparseMatrix::InnerIterator it(C, l); it; ++it)
                 if (!exact[static_cast<std::size_t>(L.dofs[it.row()] / dim)])
                     next[static_cast<std::size_t>(fine[l] / dim)] = 0;
         exact = std::move(next);
@@ -204,7 +206,7 @@ TEST_P(MraLocalized, TruncationDropsSmallEntriesOnly) {
         const Level& L0 = h0.level(1);
         EXPECT_LT(L.C_adapted.nonZeros(), L0.C_adapted.nonZeros()) << "radius " << radius;
         // Kept entries are at least tau times their row's largest; dropped ones were below it.
-        const Matrix C = Matrix(L.C_adapted), C0 = Matrix(L0.C_adapted);
+        const Matrix C = Matrix(L.C_adapted.sparse()), C0 = Matrix(L0.C_adapted.sparse());
         for (Index i = 0; i < C.rows(); ++i) {
             const double m = C0.row(i).cwiseAbs().maxCoeff();
             for (Index j = 0; j < C.cols(); ++j) {
@@ -216,7 +218,8 @@ TEST_P(MraLocalized, TruncationDropsSmallEntriesOnly) {
         }
         // A^1 is not truncated: it is the Galerkin matrix of the truncated basis, C̃ A^2 C̃^T
         // (round-off of the sparse products, 1e-12 relative).
-        const SparseMatrix A = L.C_adapted * h.A_fine * SparseMatrix(L.C_adapted.transpose());
+        const SparseMatrix Ct = L.C_adapted.sparse();
+        const SparseMatrix A = Ct * h.A_fine * SparseMatrix(Ct.transpose());
         EXPECT_LT((symmetric_from_lower(L.A) - A).norm(), 1e-12 * A.norm()) << "radius " << radius;
     }
 }
@@ -238,7 +241,8 @@ TEST_P(MraLocalized, CoarseOperatorsAreTheGalerkinProductsOnEveryLevel) {
         const Level& L = h.level(k);
         const SparseMatrix A_next =
             k + 1 == h.num_levels() ? h.A_fine : symmetric_from_lower(h.level(k + 1).A);
-        const SparseMatrix A = L.C_adapted * A_next * SparseMatrix(L.C_adapted.transpose());
+        const SparseMatrix C = L.C_adapted.sparse();
+        const SparseMatrix A = C * A_next * SparseMatrix(C.transpose());
         // Stored as its lower triangle: nothing above the diagonal.
         EXPECT_EQ(SparseMatrix(L.A.triangularView<Eigen::StrictlyUpper>()).nonZeros(), 0)
             << "level " << k;
@@ -264,7 +268,7 @@ TEST_P(MraLocalized, DefectDrivenRadiusMeetsEq12OnEveryRegion) {
     const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
     const Level& L = h.level(1);
     const SparseMatrix AWt = h.A_fine * SparseMatrix(L.W.transpose());
-    const Matrix defect = Matrix(L.C_adapted * AWt), reference = Matrix(L.C_dagger * AWt);
+    const Matrix defect = Matrix(L.C_adapted.sparse() * AWt), reference = Matrix(L.C_dagger * AWt);
     const Eigen::Vector3i nf = node_counts(h.cells(2), dim());
     std::set<int> seen;
     for (Index r = 0; r < L.dofs.size(); ++r) {
@@ -337,8 +341,8 @@ TEST_P(MraLocalized, PatchRegionsSolveTheirLocalSystems) {
         const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
         const Level& L = h.level(1);
         const Matrix W = Matrix(L.W);
-        const Matrix Z =
-            Matrix(L.C_adapted - L.C_dagger) * W.transpose() * (W * W.transpose()).inverse();
+        const Matrix Z = Matrix(L.C_adapted.sparse() - L.C_dagger) * W.transpose() *
+                         (W * W.transpose()).inverse();
         const Matrix R = Matrix(L.W * h.A_fine * SparseMatrix(L.C_dagger.transpose()));
         const Matrix B = Matrix(symmetric_from_lower(L.B));
         const Eigen::Vector3i nf = h.cells(2).array() + 1;
@@ -441,7 +445,7 @@ TEST(MraLocalizedLargeSlow, SupernodalLocalSolvesEqualGlobalSolves) {
     const double n = static_cast<double>(hl.level(1).B.rows());
     ASSERT_GE(n, 2500);
     ASSERT_LT(static_cast<double>(symmetric_nonzeros(hl.level(1).B)), 0.25 * n * n);
-    const Matrix dC = Matrix(hg.level(1).C_adapted - hl.level(1).C_adapted);
+    const Matrix dC = Matrix(hg.level(1).C_adapted.sparse() - hl.level(1).C_adapted.sparse());
     EXPECT_LT(dC.cwiseAbs().maxCoeff(), 1e-10);
 }
 
@@ -488,7 +492,7 @@ TEST(MraDefaultsSlow, CoarsestErrorWithinOneAndAHalfOfTheExactConstruction) {
         const double u_norm = test::energy_norm(p.K, p.u);
         const auto coarsest = [&](const Options& o, double* dens) {
             const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
-            *dens = density(h.level(h.num_levels() - 1).C_adapted);
+            *dens = density(h.level(h.num_levels() - 1).C_adapted.sparse());
             MultilevelSolver s(h);
             return test::energy_norm(p.K, s.solve_level(p.f, 1) - p.u) / u_norm;
         };

@@ -30,8 +30,9 @@ struct LevelDiagnostics {
     /// triangles of A^k and B^k); explicitly stored zeros count as zeros. sparsity_C is of C̃^k
     /// (NaN at level q).
     double sparsity_A = 0, sparsity_B = 0, sparsity_C = 0;
-    /// Storage (storage_bytes) as kept: A^k and B^k as their lower triangles (A^q whole); Φ^k
-    /// and Ψ^k only where kept (Options::store_bases), else the few bytes of an empty matrix.
+    /// Storage (storage_bytes) as kept: A^k and B^k as their lower triangles (A^q whole), C̃^k
+    /// as a RunMatrix; Φ^k and Ψ^k only where kept (Options::store_bases), else the few bytes
+    /// of an empty matrix.
     std::size_t bytes_Phi = 0, bytes_Psi = 0, bytes_C = 0, bytes_A = 0, bytes_B = 0;
     double build_seconds = 0;  ///< Level::build_seconds (0 at level q, which is not built)
     /// The spectrum of A^k or B^k was not computed: more rows than max_spectrum_dofs, or
@@ -67,6 +68,7 @@ Spectrum extreme_eigenvalues(const SparseMatrix& A);
 
 /// Fraction of zero entries of M (explicitly stored zeros count as zeros); 0 for an empty M.
 double sparsity(const SparseMatrix& M);
+double sparsity(const RunMatrix& M);
 
 /// All figures of all levels for the load `g_fine` (over all fine grid DOFs, as
 /// MultilevelSolver::solve_level takes it).
