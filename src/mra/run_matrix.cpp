@@ -52,9 +52,7 @@ RunMatrix::RunMatrix(const SparseMatrix& M) : m_rows(M.rows()), m_cols(M.cols())
 }
 
 Index RunMatrix::pattern_size(Index g) const {
-    Index n = 0;
-    for (Index r = m_group_runs[g]; r < m_group_runs[g + 1]; ++r) n += m_runs[r].length;
-    return n;
+    return (m_group_values[g + 1] - m_group_values[g]) / (m_group_first[g + 1] - m_group_first[g]);
 }
 
 std::size_t RunMatrix::bytes() const {
