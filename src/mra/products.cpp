@@ -328,7 +328,36 @@ SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y) {
 }
 
 SparseMatrix symmetrized(const SparseMatrix& M) {
-    SparseMatrix S = 0.5 * (M + SparseMatrix(M.transpose()));
+    SparseMatrix S = M;
+    S.makeCompressed();
+    // A structurally symmetric M (as the sparse products keep their structural patterns): each
+    // entry averaged with its mirror, found in O(1) by a cursor per column (visiting the columns
+    // in order meets the entries of each column in row order), instead of adding a transposed
+    // copy. Both give 0.5 (m_ij + m_ji), bit for bit.
+    const Index n = S.cols();
+    const Index* outer = S.outerIndexPtr();
+    const Index* inner = S.innerIndexPtr();
+    double* value = S.valuePtr();
+    bool mirrored = S.rows() == n;
+    std::vector<Index> cursor(outer, outer + n);
+    for (Index j = 0; j < n && mirrored; ++j)
+        for (Index p = outer[j]; p < outer[j + 1]; ++p) {
+            const Index i = inner[p];
+            if (i < j) continue;  // its pair was averaged from column i
+            const Index q = cursor[static_cast<std::size_t>(i)]++;
+            if (q >= outer[i + 1] || inner[q] != j) {
+                mirrored = false;
+                break;
+            }
+            value[p] = value[q] = 0.5 * (value[p] + value[q]);
+        }
+    // Every entry on or above the diagonal was met as a mirror.
+    for (Index i = 0; i < n && mirrored; ++i) {
+        const Index q = cursor[static_cast<std::size_t>(i)];
+        mirrored = q == outer[i + 1] || inner[q] > i;
+    }
+    if (mirrored) return S;
+    S = 0.5 * (M + SparseMatrix(M.transpose()));
     S.makeCompressed();
     return S;
 }

@@ -48,6 +48,9 @@ TEST_P(MraGlobal, AdaptedRefinementSatisfiesEq9AndEq12) {
         const Matrix CAWt = Matrix(L.C_adapted.sparse() * (*A) * SparseMatrix(L.W.transpose()));
         const double scale = L.C_adapted.sparse().norm() * A->norm() * L.W.norm();
         EXPECT_LT(CAWt.norm(), 1e-10 * scale) << "level " << k;
+        // B^k = W A^{k+1} W^T (Alg. 1 line 2), symmetrized: Eigen's product, to round-off.
+        const SparseMatrix B = L.W * (*A) * SparseMatrix(L.W.transpose());
+        EXPECT_LT((symmetric_from_lower(L.B) - B).norm(), 1e-13 * B.norm()) << "level " << k;
         A_level = symmetric_from_lower(L.A);
         A = &A_level;
     }

@@ -243,6 +243,9 @@ TEST_P(MraLocalized, CoarseOperatorsAreTheGalerkinProductsOnEveryLevel) {
             k + 1 == h.num_levels() ? h.A_fine : symmetric_from_lower(h.level(k + 1).A);
         const SparseMatrix C = L.C_adapted.sparse();
         const SparseMatrix A = C * A_next * SparseMatrix(C.transpose());
+        // B^k = W A^{k+1} W^T, symmetrized (structurally symmetric: averaged in place).
+        const SparseMatrix B = L.W * A_next * SparseMatrix(L.W.transpose());
+        EXPECT_LT((symmetric_from_lower(L.B) - B).norm(), 1e-13 * B.norm()) << "level " << k;
         // Stored as its lower triangle: nothing above the diagonal.
         EXPECT_EQ(SparseMatrix(L.A.triangularView<Eigen::StrictlyUpper>()).nonZeros(), 0)
             << "level " << k;
