@@ -40,13 +40,15 @@ struct LocalizationRings {
     double defect_tolerance = 0;
 };
 
-/// Z and, per node of level k, the rings of its region's final solve (0: a node without DOFs).
-struct LocalizedZ {
-    SparseMatrix Z;
+/// C̃^k and, per node of level k, the rings of its region's final solve (0: a node without DOFs).
+struct LocalizedRefinement {
+    SparseMatrix Ct;
     std::vector<int> rings;
 };
 
-/// Z with localized solves (Sec. 3.5 "Fast computation"): for each coarse node i, the region
+/// C̃^k = C^† + Z W (Eq. 11) with Z from localized solves (Sec. 3.5 "Fast computation"), each
+/// region's rows of C̃ formed from its solution directly (Z is never assembled: at 64^3 it held
+/// as many entries as C̃). For each coarse node i, the region
 /// R_i holds the level-(k+1) nodes within `rings` grid rings (Chebyshev distance) of the node
 /// coincident with i; S_i are the wavelets (rows of W) with a nonzero on a node of R_i; the rows
 /// of Z for the DOFs of node i solve B[S_i, S_i] z = -R[S_i, DOFs of i] and vanish outside S_i.
@@ -65,8 +67,10 @@ struct LocalizedZ {
 /// changes nothing but the cost. The regions are processed in parallel (OpenMP), each with its
 /// own dense (small) or sparse Cholesky factorization; regions of the same shape reuse the
 /// symbolic analysis.
-LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
-                       const StepGeometry& g, const LocalizationRings& rings, int patch);
+LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatrix& R,
+                                         const SparseMatrix& C_dagger, const SparseMatrix& W,
+                                         const StepGeometry& g, const LocalizationRings& rings,
+                                         int patch);
 
 /// The part A_T of the fine operator from the fine elements inside one cell T of a coarser level
 /// (Localization::Cell): the sum of their element matrices on their present fine DOFs.

@@ -318,26 +318,27 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         if (std::isinf(L.radius)) {
             const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
             Ct = detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation);
-        } else {
+        } else if (by_cell) {
             SparseMatrix Z;
-            if (by_cell) {
+            {
                 const Phase phase(tag + "Z (cell-localized solves)", &h.timings);
                 Z = detail::cell_localized_z(
                     L.B, L.W, product(L.W, Phi_present), product(L.C_dagger, Phi_present),
                     detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells), g, rings);
-            } else {
-                const Phase phase(tag + "Z (localized solves)", &h.timings);
-                detail::LocalizationRings lr;
-                lr.start = rings;
-                lr.max = std::max(rings, to_rings(options.max_radius));
-                lr.defect_tolerance = options.defect_tolerance;
-                detail::LocalizedZ lz = detail::localized_z(L.B, R, L.W, g, lr, options.patch);
-                Z = std::move(lz.Z);
-                L.region_rings = std::move(lz.rings);
             }
             const Phase phase(tag + "C adapted", &h.timings);
             Ct = L.C_dagger + product(Z, L.W);
             Ct.makeCompressed();
+        } else {
+            const Phase phase(tag + "C adapted (localized solves)", &h.timings);
+            detail::LocalizationRings lr;
+            lr.start = rings;
+            lr.max = std::max(rings, to_rings(options.max_radius));
+            lr.defect_tolerance = options.defect_tolerance;
+            detail::LocalizedRefinement lz =
+                detail::localized_refinement(L.B, R, L.C_dagger, L.W, g, lr, options.patch);
+            Ct = std::move(lz.Ct);
+            L.region_rings = std::move(lz.rings);
         }
         R = SparseMatrix();
         L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());

@@ -19,6 +19,7 @@ namespace coarsegrain::mra::detail {
 namespace {
 
 using Triplet = Eigen::Triplet<double, Index>;
+using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
 
 /// Columns of R solved per block in global_adapted_refinement: a block of the dense right-hand side
 /// is #wavelets x 64 doubles.
@@ -69,9 +70,9 @@ struct LocalOrder {
 
 /// Per-thread scratch of the localized solves: `local`, the wavelet -> region row map (-1 for
 /// wavelets outside the region; whoever fills it restores it), the region's wavelets S and its
-/// B[S, S], a zero vector over the wavelets, and per growth step of the region (Eq. 12
-/// defect-driven radius) a sparse solver and its order, kept across regions for their symbolic
-/// analyses.
+/// B[S, S], a zero vector over the wavelets, a -1 map over the fine DOFs (adapted_rows), and per
+/// growth step of the region (Eq. 12 defect-driven radius) a sparse solver and its order, kept
+/// across regions for their symbolic analyses.
 struct RegionScratch {
     explicit RegionScratch(Index wavelets)
         : local(static_cast<std::size_t>(wavelets), -1),
@@ -80,6 +81,7 @@ struct RegionScratch {
     std::vector<Index> S;
     SparseMatrix b;
     std::vector<double> work;
+    std::vector<Index> fine_position;  ///< adapted_rows' positions, sized on first use
     std::vector<solve::SpdSolver> solvers;
     std::vector<LocalOrder> orders;
 };
@@ -93,15 +95,14 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
     solver.compute(B);
     const Index nc = static_cast<Index>(R.cols()), nf = static_cast<Index>(W.cols());
     const SparseMatrix Wt = W.transpose();
-    const Eigen::SparseMatrix<double, Eigen::RowMajor, Index> Cd = C_dagger;
+    const RowSparse Cd = C_dagger;
     std::vector<Triplet> t;
     for (Index c0 = 0; c0 < nc; c0 += kGlobalBlock) {
         const Index nb = std::min(kGlobalBlock, nc - c0);
         // Rows c0.. of C̃ = C^† + Z W with Z^T = -B^{-1} R, as columns: C^{†,T} - W^T B^{-1} R.
         Matrix rows = -(Wt * solver.solve(Matrix(R.middleCols(c0, nb))));
         for (Index c = 0; c < nb; ++c)
-            for (decltype(Cd)::InnerIterator it(Cd, c0 + c); it; ++it)
-                rows(it.col(), c) += it.value();
+            for (RowSparse::InnerIterator it(Cd, c0 + c); it; ++it) rows(it.col(), c) += it.value();
         for (Index c = 0; c < nb; ++c) {
             const double cut = tau * rows.col(c).cwiseAbs().maxCoeff();
             for (Index f = 0; f < nf; ++f) {
@@ -117,7 +118,7 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
 
 namespace {
 
-/// A patch of coarse nodes (indices into the node list of localized_z) whose rows of Z are
+/// A patch of coarse nodes (indices into the node list of localized_refinement) whose rows of Z are
 /// solved on one box of level-(k+1) nodes: those within `rings` of the patch's nodes, whose
 /// positions on level k+1 span [first, last] (grid coordinates).
 struct Region {
@@ -356,42 +357,73 @@ double orthogonality_defect(const SparseMatrix& B, const SparseMatrix& R, const 
     return worst;
 }
 
-/// The solution of one region's local systems: rows of Z (rows[q]) holding -x(:, q) on the
-/// wavelets S.
+/// One region's rows of a matrix: row rows[q] holds x(:, q) at the columns cols.
 struct RegionSolution {
     std::vector<Index> rows;
-    std::vector<Index> S;
+    std::vector<Index> cols;
     Matrix x;
 };
 
-/// Z (#rows by #cols) from region solutions that each own their rows (no row in two regions),
-/// built row by row and converted, freeing the solutions on the way: about 20 bytes per entry
-/// at the peak, against 56 through triplets.
+/// The rows `rows` of C̃ = C^† + Z W whose Z rows are -x on the wavelets S (zero elsewhere), over
+/// the columns (fine DOFs, sorted) that C^† and W[S, :] touch. Wt = W^T, Cd = C^† by rows;
+/// position (#fine DOFs, -1) is used and left -1.
+RegionSolution adapted_rows(const Matrix& x, const std::vector<Index>& S, std::vector<Index> rows,
+                            const SparseMatrix& Wt, const RowSparse& Cd,
+                            std::vector<Index>& position) {
+    RegionSolution out{std::move(rows), {}, {}};
+    const auto touch = [&](Index f) {
+        if (position[static_cast<std::size_t>(f)] < 0) {
+            position[static_cast<std::size_t>(f)] = 0;
+            out.cols.push_back(f);
+        }
+    };
+    for (const Index w : S)
+        for (SparseMatrix::InnerIterator it(Wt, w); it; ++it) touch(static_cast<Index>(it.row()));
+    for (const Index r : out.rows)
+        for (RowSparse::InnerIterator it(Cd, r); it; ++it) touch(static_cast<Index>(it.col()));
+    std::sort(out.cols.begin(), out.cols.end());
+    for (std::size_t c = 0; c < out.cols.size(); ++c)
+        position[static_cast<std::size_t>(out.cols[c])] = static_cast<Index>(c);
+    out.x = Matrix::Zero(static_cast<Index>(out.cols.size()), x.cols());
+    for (std::size_t s = 0; s < S.size(); ++s)
+        for (SparseMatrix::InnerIterator it(Wt, S[s]); it; ++it)
+            out.x.row(position[static_cast<std::size_t>(it.row())]) -=
+                it.value() * x.row(static_cast<Index>(s));
+    for (std::size_t q = 0; q < out.rows.size(); ++q)
+        for (RowSparse::InnerIterator it(Cd, out.rows[q]); it; ++it)
+            out.x(position[static_cast<std::size_t>(it.col())], static_cast<Index>(q)) +=
+                it.value();
+    for (const Index f : out.cols) position[static_cast<std::size_t>(f)] = -1;
+    return out;
+}
+
+/// A #rows by #cols matrix from region solutions that each own their rows (no row in two
+/// regions), built row by row and converted, freeing the solutions on the way: about 20 bytes
+/// per entry at the peak, against 56 through triplets. Exact zeros are left out.
 SparseMatrix from_region_solutions(std::vector<RegionSolution>& solutions, Index rows, Index cols) {
-    using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
     std::vector<Index> count(static_cast<std::size_t>(rows), 0);
     for (const RegionSolution& s : solutions)
         for (std::size_t q = 0; q < s.rows.size(); ++q)
             count[static_cast<std::size_t>(s.rows[q])] =
                 static_cast<Index>((s.x.col(static_cast<Index>(q)).array() != 0.0).count());
-    RowMajor Zr(rows, cols);
-    Index* outer = Zr.outerIndexPtr();
+    RowSparse M(rows, cols);
+    Index* outer = M.outerIndexPtr();
     outer[0] = 0;
     for (Index r = 0; r < rows; ++r) outer[r + 1] = outer[r] + count[static_cast<std::size_t>(r)];
-    Zr.resizeNonZeros(outer[rows]);
+    M.resizeNonZeros(outer[rows]);
     for (RegionSolution& s : solutions) {
         for (std::size_t q = 0; q < s.rows.size(); ++q) {
             Index k = outer[s.rows[q]];
-            for (std::size_t e = 0; e < s.S.size(); ++e) {
+            for (std::size_t e = 0; e < s.cols.size(); ++e) {
                 const double v = s.x(static_cast<Index>(e), static_cast<Index>(q));
                 if (v == 0.0) continue;
-                Zr.innerIndexPtr()[k] = s.S[e];
-                Zr.valuePtr()[k++] = -v;
+                M.innerIndexPtr()[k] = s.cols[e];
+                M.valuePtr()[k++] = v;
             }
         }
         s = RegionSolution();
     }
-    return SparseMatrix(Zr);
+    return SparseMatrix(M);
 }
 
 /// Z (#rows by #cols) from per-region entries (duplicates summed), freeing them on the way.
@@ -434,8 +466,10 @@ void for_each_region(Index count, Index nw, F&& solve) {
 
 }  // namespace
 
-LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const SparseMatrix& W,
-                       const StepGeometry& g, const LocalizationRings& rings, int patch) {
+LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatrix& R,
+                                         const SparseMatrix& C_dagger, const SparseMatrix& W,
+                                         const StepGeometry& g, const LocalizationRings& rings,
+                                         int patch) {
     const int dim = g.dim;
     const Index nw = static_cast<Index>(W.rows());
     const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
@@ -455,14 +489,17 @@ LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spars
     const std::vector<Region> regions = patch_regions(nodes, g, rings.start, patch);
     const Index num_regions = static_cast<Index>(regions.size());
 
-    LocalizedZ out;
+    const SparseMatrix Wt = W.transpose();
+    const RowSparse Cd = C_dagger;
+    const Index num_fine = static_cast<Index>(W.cols());
+    LocalizedRefinement out;
     out.rings.assign(static_cast<std::size_t>(grid_nodes(g.coarse_cells, dim)), 0);
     std::vector<RegionSolution> solutions(static_cast<std::size_t>(num_regions));
     for_each_region(num_regions, nw, [&](Index n, RegionScratch& scratch) {
         std::vector<Index>& local = scratch.local;
         std::vector<Index>& S = scratch.S;
         const Region& region = regions[static_cast<std::size_t>(n)];
-        // The rows of Z of the region's nodes.
+        // The rows (of Z and C̃) of the region's nodes.
         std::vector<Index> rows;
         for (const Index m : region.members)
             for (Index r = first[static_cast<std::size_t>(m)];
@@ -483,9 +520,9 @@ LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spars
                     const Index l = local[static_cast<std::size_t>(it.row())];
                     if (l >= 0) rhs(l, q) = it.value();
                 }
-            if (ns > 0) x = solve_region(B, S, local, rhs, scratch, attempt);
+            x = ns > 0 ? solve_region(B, S, local, rhs, scratch, attempt) : Matrix(0, nr);
             for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
-            if (ns == 0) return;
+            if (ns == 0) break;  // no wavelet near: the rows are C^†'s
             const bool whole = (lo.array() == 0).all() && (hi.array() == nf.array() - 1).all();
             if (!adaptive || r >= rings.max || whole ||
                 orthogonality_defect(B, R, x, rows, S, scratch.work) <= rings.defect_tolerance)
@@ -494,9 +531,12 @@ LocalizedZ localized_z(const SparseMatrix& B, const SparseMatrix& R, const Spars
         }
         for (const Index m : region.members)
             out.rings[static_cast<std::size_t>(nodes[static_cast<std::size_t>(m)])] = r;
-        solutions[static_cast<std::size_t>(n)] = {std::move(rows), S, std::move(x)};
+        if (scratch.fine_position.empty())
+            scratch.fine_position.assign(static_cast<std::size_t>(num_fine), -1);
+        solutions[static_cast<std::size_t>(n)] =
+            adapted_rows(x, S, std::move(rows), Wt, Cd, scratch.fine_position);
     });
-    out.Z = from_region_solutions(solutions, static_cast<Index>(g.coarse_dofs.size()), nw);
+    out.Ct = from_region_solutions(solutions, static_cast<Index>(g.coarse_dofs.size()), num_fine);
     return out;
 }
 

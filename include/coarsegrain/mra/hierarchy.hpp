@@ -227,7 +227,9 @@
 /// reuse from 100 unknowns instead of Eigen's simplicial LLT below 1000, dense ones by LAPACK.
 /// (e) session 14: A^k and B^k kept as their lower triangles, the Galerkin product assembling
 /// only that one (storage: C̃ 22.2M entries, A^1 10.6M, B 3.8M at patch 1).
-/// (f) session 15: C̃^k kept as a RunMatrix (8.6 bytes per entry instead of 12).
+/// (f) session 15: C̃^k kept as a RunMatrix (8.6 bytes per entry instead of 12); (g) C̃'s rows
+/// formed from each region's solution, without assembling Z ("solves" then includes C̃ = C^† +
+/// Z W, which took ~1 s), and B symmetrized in place.
 /// Peak = the bench's high-water mark (fine problem and its solve included; (c) patch 2 was
 /// measured before the last two changes, which took patch 1 from 1393 to 1261 MB).
 ///
@@ -244,6 +246,7 @@
 /// | 2     | (e) | 20.6    | 9.3      | 6.5   | 580        | 1848    | 0.48           |
 /// | 1     | (f) | 34.2    | 25.1     | 5.6   | 363        | 1271    | 0.58           |
 /// | 2     | (f) | 20.7    | 9.6      | 6.6   | 470        | 1848    | 0.48           |
+/// | 1     | (g) | 29.6-31.0 | 23.0-24.0 | 4.6-4.7 | 363    | 1139-1153 | 0.58         |
 ///
 /// The paper's 18K-node hex model is not a solid box: the shark has 18,234 nodes for ~10K
 /// hexes and 3,317 coarse nodes, i.e. it is mostly 1-2 elements thick, and its C^1 is 2.2%
