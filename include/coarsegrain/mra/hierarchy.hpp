@@ -247,6 +247,7 @@
 /// | 1     | (f) | 34.2    | 25.1     | 5.6   | 363        | 1271    | 0.58           |
 /// | 2     | (f) | 20.7    | 9.6      | 6.6   | 470        | 1848    | 0.48           |
 /// | 1     | (g) | 29.6-31.0 | 23.0-24.0 | 4.6-4.7 | 363    | 1139-1153 | 0.58         |
+/// | 2     | (g) | 17.3    | 9.1      | 5.9   | 470        | 1450    | 0.48           |
 ///
 /// The paper's 18K-node hex model is not a solid box: the shark has 18,234 nodes for ~10K
 /// hexes and 3,317 coarse nodes, i.e. it is mostly 1-2 elements thick, and its C^1 is 2.2%
