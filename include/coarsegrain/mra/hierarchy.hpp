@@ -270,9 +270,10 @@
 /// 64^3 cells (274,625 nodes), two levels, rho = 2 fine rings: build 129.8 s in (e) (local
 /// solves 62.1 s, B 25.5 s, A^1 17.8 s, C̃ = C^† + Z W 10.6 s, invariance 6.7 s; (d): 146.5 s
 /// with A^1 30.2 s; (c): 298.6 s, local solves 207 s), storage 3.3 GB in (e) (C̃ 1.1e8 entries,
-/// lower triangles of A^1 9.6e7 and B 6.6e7), 5.2 GB in (d), 2.97 GB in (f); peak 9.9 GB from
-/// the start of the build in (e) (10.6 GB in (d), 9.5 GB in (f), whose build overlapped another
-/// job: its 152.8 s are not comparable), ~4.6 GB of it the bench's fine problem. Coarsest
+/// lower triangles of A^1 9.6e7 and B 6.6e7), 5.2 GB in (d), 2.97 GB in (f, g); peak 9.9 GB
+/// from the start of the build in (e) (10.6 GB in (d)), ~4.6 GB of it the bench's fine problem.
+/// In (g): build 119.7 s (B 15.7 s, localized solves with C̃ 64.7 s, invariance 6.6 s, A^1
+/// 26.1 s), peak 9.0 GB; the bench's own fine reference solve peaks at 19.2 GB before. Coarsest
 /// factorize + solve 192 s + 0.67 s against 218 s + 1.0 s for the fine one (1.1x; A^1 is
 /// 107,811 DOFs with 1.9e8 nonzeros); coarsest error 0.72. At rho = 5, A^1's lower triangle
 /// alone would need ~4.3 GB and C̃ ~2.7 GB as runs (3.8 GB in CSC): with B, the transient
