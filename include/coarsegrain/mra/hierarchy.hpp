@@ -412,7 +412,7 @@ struct Level {
     SparseMatrix C_dagger;  ///< left inverse C^{k,†} (Eq. 10; rigid one for Localization::Cell)
     SparseMatrix W;         ///< kernel W^k, #wavelets by #dofs(k+1)
     /// C̃^k = C^{k,†} + Z W^k (Eq. 11), localized/corrected/truncated, #dofs by #dofs(k+1); kept
-    /// by runs (RunMatrix: ~8 bytes per entry instead of CSC's 12).
+    /// by runs (RunMatrix: 8.6 bytes per entry at Table 1's setting, CSC 12).
     RunMatrix C_adapted;
     /// A^k = C̃^k A^{k+1} C̃^{k,T} (Alg. 1 line 7), symmetric: its lower triangle, diagonal
     /// included (symmetric_from_lower gives the whole matrix).
