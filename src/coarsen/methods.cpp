@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "../scene/json_reader.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/homogenize/homogenize.hpp"
@@ -11,7 +12,8 @@ namespace coarsegrain::coarsen {
 
 const std::vector<std::string>& method_names() {
     static const std::vector<std::string> names = {
-        "effective-tensor", "naive", "voigt", "reuss", "mra", "mra-linear", "mra-dirac"};
+        "effective-tensor", "naive",          "voigt", "reuss", "mra", "mra-linear", "mra-dirac",
+        "mra-linear-blind", "mra-dirac-blind"};
     return names;
 }
 
@@ -21,6 +23,15 @@ std::vector<std::string> configured_methods(const scene::Scene& scene) {
     if (scene.coarse.is_object() && scene.coarse.contains("levels")) {
         methods.push_back("mra-linear");
         methods.push_back("mra-dirac");
+        const scene::JsonReader r(scene.coarse, "coarse", scene.source);
+        if (auto v = r.find("boundary_blind")) {
+            v->fail_unless(v->json().is_boolean(), "expected true or false, got {}",
+                           v->json().dump());
+            if (v->json().get<bool>()) {
+                methods.push_back("mra-linear-blind");
+                methods.push_back("mra-dirac-blind");
+            }
+        }
     }
     CG_VERIFY(!methods.empty(),
               "{}: the \"coarse\" block configures no method: expected coarse.mesh "
@@ -38,9 +49,14 @@ CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel
     if (method == "mra") {
         m = mra::build_coarse_model(scene, fine);
     } else if (method.starts_with("mra-")) {
-        scene::Scene with_refinement = scene;
-        with_refinement.coarse["refinement"] = method.substr(4);
-        m = mra::build_coarse_model(with_refinement, fine);
+        scene::Scene variant = scene;
+        std::string refinement = method.substr(4);
+        if (refinement.ends_with("-blind")) {
+            variant.coarse["dirichlet"] = "ignore";
+            refinement.resize(refinement.size() - std::string_view("-blind").size());
+        }
+        variant.coarse["refinement"] = refinement;
+        m = mra::build_coarse_model(variant, fine);
     } else {
         m = homogenize::build_coarse_model(scene, fine, method);
     }

@@ -231,14 +231,15 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
         bool found = false;
         for (DirichletTreatment t :
              {DirichletTreatment::Constrain, DirichletTreatment::Eliminate,
-              DirichletTreatment::Penalty, DirichletTreatment::DiagonalPenalty})
+              DirichletTreatment::Penalty, DirichletTreatment::DiagonalPenalty,
+              DirichletTreatment::Ignore})
             if (dirichlet_name(t) == s) {
                 o.dirichlet = t;
                 found = true;
             }
         v->fail_unless(found,
-                       "expected \"constrain\", \"eliminate\", \"penalty\" or "
-                       "\"diagonal_penalty\", got \"{}\"",
+                       "expected \"constrain\", \"eliminate\", \"penalty\", "
+                       "\"diagonal_penalty\" or \"ignore\", got \"{}\"",
                        s);
     }
     return o;
@@ -273,11 +274,14 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
     m.f = P * coarse_grain(h, f_fine, 1);
     m.to_fine = SparseMatrix(basis(h, 1).transpose()) * SparseMatrix(P.transpose());
     m.to_fine.makeCompressed();
-    std::vector<Index> dropped(L1.dropped_dofs.data(),
-                               L1.dropped_dofs.data() + L1.dropped_dofs.size());
-    if (!dropped.empty()) {
-        m.bc.dofs = dropped;
-        m.bc.values = Vector::Zero(static_cast<Index>(dropped.size()));
+    // Held at zero: the DOFs without a basis function, and the boundary-blind level's fixed ones.
+    std::vector<Index> held(L1.dropped_dofs.data(),
+                            L1.dropped_dofs.data() + L1.dropped_dofs.size());
+    for (const Index r : L1.fixed) held.push_back(L1.dofs[r]);
+    std::sort(held.begin(), held.end());
+    if (!held.empty()) {
+        m.bc.dofs = held;
+        m.bc.values = Vector::Zero(static_cast<Index>(held.size()));
     }
     m.timings = h.timings;
 

@@ -144,7 +144,11 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
         L.error_over_u = energy_norm(h.A_fine, e) / u_norm;
         if (options.keep_solutions) d.solutions.push_back(std::move(u_k));
         const bool lower = k < q;  // Level::A is stored as its lower triangle, A_fine whole
-        const Spectrum sa = level_spectrum(A, lower, "A", options.max_spectrum_dofs, L);
+        // The spectrum of the operator the level's solves factorize (boundary-blind levels:
+        // without their fixed DOFs, whose A^k is singular).
+        const bool held = fixed_positions(h, k).size() > 0;
+        const Spectrum sa = level_spectrum(held ? free_operator(h, k) : A, lower, "A",
+                                           options.max_spectrum_dofs, L);
         L.lambda_min_A = sa.lambda_min;
         L.lambda_max_A = sa.lambda_max;
         L.cond_A = sa.condition();

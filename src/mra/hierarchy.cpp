@@ -84,6 +84,8 @@ std::string dirichlet_name(DirichletTreatment t) {
             return "diagonal_penalty";
         case DirichletTreatment::Constrain:
             return "constrain";
+        case DirichletTreatment::Ignore:
+            return "ignore";
     }
     return "?";
 }
@@ -115,6 +117,27 @@ Eigen::VectorXd Hierarchy::node_position(int k, Index v) const {
     Eigen::VectorXd p(dim);
     for (int d = 0; d < dim; ++d) p[d] = origin[d] + x[d] * scale * spacing[d];
     return p;
+}
+
+const IndexVector& fixed_positions(const Hierarchy& h, int k) {
+    return k == h.num_levels() ? h.fine_fixed : h.level(k).fixed;
+}
+
+IndexVector free_positions(const Hierarchy& h, int k) {
+    const IndexVector& held = fixed_positions(h, k);
+    const Index n = k == h.num_levels() ? h.fine_dofs.size() : h.level(k).dofs.size();
+    IndexVector free(n - held.size());
+    for (Index i = 0, f = 0, r = 0; i < n; ++i) {
+        if (f < held.size() && held[f] == i)
+            ++f;
+        else
+            free[r++] = i;
+    }
+    return free;
+}
+
+SparseMatrix free_operator(const Hierarchy& h, int k) {
+    return principal_submatrix(k == h.num_levels() ? h.A_fine : h.level(k).A, free_positions(h, k));
 }
 
 std::size_t storage_bytes(const SparseMatrix& M) {
@@ -176,9 +199,10 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         CG_VERIFY(options.patch == 1, "mra: cell localization needs patch = 1, got {}",
                   options.patch);
         CG_VERIFY(options.dirichlet == DirichletTreatment::Eliminate ||
-                      options.dirichlet == DirichletTreatment::Constrain,
-                  "mra: cell localization needs the eliminate or constrain Dirichlet treatment "
-                  "(the penalty is not part of the element matrices), got {}",
+                      options.dirichlet == DirichletTreatment::Constrain ||
+                      options.dirichlet == DirichletTreatment::Ignore,
+                  "mra: cell localization needs the eliminate, constrain or ignore Dirichlet "
+                  "treatment (the penalty is not part of the element matrices), got {}",
                   dirichlet_name(options.dirichlet));
     }
     CG_VERIFY(options.truncation >= 0 && options.truncation < 1,
@@ -200,7 +224,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     h.spacing = mesh.grid->spacing();
     h.origin = mesh.grid->min;
 
-    // Level q: the fine operator with the Dirichlet DOFs eliminated or penalized.
+    // Level q: the fine operator with the Dirichlet DOFs eliminated or penalized (or, blind,
+    // untouched).
     std::vector<char> fixed(static_cast<std::size_t>(n_dofs), 0);
     for (std::size_t k = 0; k < fixed_dofs.size(); ++k) {
         const Index d = fixed_dofs[k];
@@ -208,16 +233,22 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                   "mra: Dirichlet DOFs must be sorted, unique and in 0..{}", n_dofs - 1);
         fixed[static_cast<std::size_t>(d)] = 1;
     }
+    const bool blind = options.dirichlet == DirichletTreatment::Ignore;
     const bool penalize = options.dirichlet == DirichletTreatment::Penalty ||
                           options.dirichlet == DirichletTreatment::DiagonalPenalty;
     {
         const Phase phase("level " + std::to_string(q) + ": fine operator", &h.timings);
         std::vector<Index> present;
         for (Index d = 0; d < n_dofs; ++d)
-            if (penalize || !fixed[static_cast<std::size_t>(d)]) present.push_back(d);
+            if (penalize || blind || !fixed[static_cast<std::size_t>(d)]) present.push_back(d);
         h.fine_dofs =
             Eigen::Map<const IndexVector>(present.data(), static_cast<Index>(present.size()));
-        if (penalize) {
+        if (blind) {
+            h.A_fine = K;
+            h.A_fine.makeCompressed();
+            h.fine_fixed = Eigen::Map<const IndexVector>(fixed_dofs.data(),
+                                                         static_cast<Index>(fixed_dofs.size()));
+        } else if (penalize) {
             h.A_fine = K;
             for (const Index d : fixed_dofs)
                 h.A_fine.coeffRef(d, d) += options.dirichlet == DirichletTreatment::Penalty
@@ -229,9 +260,10 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         }
     }
 
-    // Finest nodes with a fixed DOF.
+    // Finest nodes with a fixed DOF, as the construction sees them (none when blind).
     std::vector<char> fixed_node(static_cast<std::size_t>(mesh.num_nodes()), 0);
-    for (const Index d : fixed_dofs) fixed_node[static_cast<std::size_t>(d / dim)] = 1;
+    if (!blind)
+        for (const Index d : fixed_dofs) fixed_node[static_cast<std::size_t>(d / dim)] = 1;
 
     SparseMatrix Phi = options.store_bases ? fine_selection(h) : SparseMatrix();
     // Cell localization: Φ^{k+1} on the present fine DOFs (Φ^q = I).
@@ -344,17 +376,26 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
         L.B.makeCompressed();
 
-        // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node.
+        // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node; blind,
+        // the DOFs held at zero when this level is solved.
         const Index coarse_nodes = grid_nodes(L.cells, dim);
         L.dirichlet_nodes.assign(static_cast<std::size_t>(coarse_nodes), 0);
         {
             const Eigen::Vector3i nq = node_counts(cells, dim);
             const int s = 1 << (q - k);
-            for (Index i = 0; i < coarse_nodes; ++i) {
+            const auto finest = [&](Index i) {
                 const Eigen::Vector3i x = s * node_coordinates(i, L.cells, dim);
+                return x[0] + nq[0] * (x[1] + nq[1] * x[2]);
+            };
+            for (Index i = 0; i < coarse_nodes; ++i)
                 L.dirichlet_nodes[static_cast<std::size_t>(i)] =
-                    fixed_node[static_cast<std::size_t>(x[0] + nq[0] * (x[1] + nq[1] * x[2]))];
-            }
+                    fixed_node[static_cast<std::size_t>(finest(i))];
+            std::vector<Index> held;
+            for (Index r = 0; blind && r < L.dofs.size(); ++r)
+                if (fixed[static_cast<std::size_t>(dim * finest(L.dofs[r] / dim) +
+                                                   L.dofs[r] % dim)])
+                    held.push_back(r);
+            L.fixed = Eigen::Map<const IndexVector>(held.data(), static_cast<Index>(held.size()));
         }
 
         if (options.truncation > 0) {

@@ -21,7 +21,20 @@ void MultilevelSolver::factorize_level(int k) {
     solve::SolverOptions options;
     options.lower_triangle = !fine;  // Level::A holds the lower triangle of A^k
     s = std::make_unique<solve::SpdSolver>(options);
-    s->compute(fine ? m_h.A_fine : m_h.level(k).A);
+    if (fixed_positions(m_h, k).size() > 0)
+        s->compute(free_operator(m_h, k));
+    else
+        s->compute(fine ? m_h.A_fine : m_h.level(k).A);
+}
+
+Vector MultilevelSolver::solve_on_level(const Vector& g, int k) {
+    factorize_level(k);
+    const solve::SpdSolver& s = *m_A[static_cast<std::size_t>(k - 1)];
+    if (fixed_positions(m_h, k).size() == 0) return s.solve(g);
+    const IndexVector free = free_positions(m_h, k);
+    Vector u = Vector::Zero(g.size());
+    u(free) = s.solve(Vector(g(free)));
+    return u;
 }
 
 void MultilevelSolver::factorize_wavelets(int k) {
@@ -37,6 +50,9 @@ void MultilevelSolver::factorize_wavelets(int k) {
 Vector MultilevelSolver::solve_levels(const Vector& g_fine, int m) {
     const int q = m_h.num_levels();
     CG_VERIFY(m >= 1 && m <= q, "mra: number of levels {} out of range 1..{}", m, q);
+    CG_VERIFY(m == 1 || m_h.options.dirichlet != DirichletTreatment::Ignore,
+              "mra: the boundary-blind hierarchy (dirichlet \"ignore\") has no wavelet solves: "
+              "its wavelets do not vanish at the fixed DOFs; solve one level at a time");
     // Coarse-graining g^k = C̃^k g^{k+1}, keeping W^k g^{k+1} for the wavelet solves.
     std::vector<Vector> Wg(static_cast<std::size_t>(q - 1));
     Vector g = coarse_grain(m_h, g_fine, q);
@@ -47,8 +63,7 @@ Vector MultilevelSolver::solve_levels(const Vector& g_fine, int m) {
     }
     // u = Φ^{1,T} v^1 + sum_{k<m} Ψ^{k,T} w^k, accumulated from the coarsest level:
     // u^{k+1} = C̃^{k,T} u^k + W^{k,T} w^k, since Φ^k = C̃^k Φ^{k+1} and Ψ^k = W^k Φ^{k+1}.
-    factorize_level(1);
-    Vector u = m_A[0]->solve(g);
+    Vector u = solve_on_level(g, 1);
     for (int k = 1; k < q; ++k) {
         const Level& L = m_h.level(k);
         u = L.C_adapted.transpose_times(u);
@@ -62,9 +77,7 @@ Vector MultilevelSolver::solve_levels(const Vector& g_fine, int m) {
 }
 
 Vector MultilevelSolver::solve_level(const Vector& g_fine, int k) {
-    factorize_level(k);
-    const Vector g = coarse_grain(m_h, g_fine, k);
-    return reconstruct(m_h, m_A[static_cast<std::size_t>(k - 1)]->solve(g), k);
+    return reconstruct(m_h, solve_on_level(coarse_grain(m_h, g_fine, k), k), k);
 }
 
 Vector expand_fine(const Hierarchy& h, const Vector& u_present) {

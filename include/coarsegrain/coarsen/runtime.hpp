@@ -38,11 +38,14 @@ Errors compare(const scene::FineModel& fine, const Vector& u, const Vector& u_c)
 
 /// Names of the methods `build_coarse_model` knows, in the order reports list them.
 /// "mra-linear" and "mra-dirac" are "mra" with coarse.refinement set to "linear" / "dirac"
-/// (replacing the scene's), so that one run compares both refinements (Chen 2019, Sec. 3.7).
+/// (replacing the scene's), so that one run compares both refinements (Chen 2019, Sec. 3.7);
+/// "mra-linear-blind" and "mra-dirac-blind" also set coarse.dirichlet to "ignore" (the
+/// boundary-blind construction of Chen et al. 2018 that Fig. 12 compares with).
 const std::vector<std::string>& method_names();
 
 /// The methods a scene's "coarse" block configures (what `--method all` runs): with coarse.mesh
-/// effective-tensor, naive, voigt and reuss; with coarse.levels mra-linear and mra-dirac.
+/// effective-tensor, naive, voigt and reuss; with coarse.levels mra-linear and mra-dirac, and
+/// with coarse.boundary_blind true also mra-linear-blind and mra-dirac-blind.
 /// @throws Error naming the scene if it configures none
 std::vector<std::string> configured_methods(const scene::Scene& scene);
 

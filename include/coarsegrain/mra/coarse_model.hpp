@@ -19,11 +19,13 @@ namespace coarsegrain::mra {
 /// - "radius_grid": "fine" (default) | "coarse";
 /// - "defect_tolerance": number >= 0 (default 0, Options::defect_tolerance), "max_radius":
 ///   number >= 1 (default 16);
+/// - "patch": integer >= 1 (default 1, Options::patch; finite radii only);
 /// - "localization": "node" (default) | "cell" (Localization; finite radii only);
 /// - "measurement": "canonical" (default) | "stiffness" (Measurement; no effect on Dirac);
 /// - "truncation": number in [0, 1) (default 1e-7, Options::truncation);
 /// - "invariance": true (default) | false;
-/// - "dirichlet": "constrain" (default) | "eliminate" | "penalty" | "diagonal_penalty".
+/// - "dirichlet": "constrain" (default) | "eliminate" | "penalty" | "diagonal_penalty" | "ignore"
+///   (boundary-blind, as Chen et al. 2018: DirichletTreatment::Ignore).
 /// @throws InvalidScene naming `coarse.<key>` and the source
 Options parse_options(const nlohmann::json& coarse, const std::string& source);
 
@@ -33,7 +35,8 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source);
 /// a translation t are s t with s the row sums of the chain (s = 1 for Dirac, 4^(q-1) at
 /// interior nodes of a 2D grid for the linear refinement); the model's DOFs u_c = v / s are
 /// displacements of the coarse nodes. DOFs without a basis function (see
-/// Level::dropped_dofs) have empty rows and columns and are fixed at 0 in bc. `report` holds the
+/// Level::dropped_dofs) have empty rows and columns and are fixed at 0 in bc, as are, on a
+/// boundary-blind hierarchy, the DOFs of Level::fixed. `report` holds the
 /// options and per level: nodes, dofs, wavelets, radius, build_seconds, nnz and density of C̃,
 /// A and B, and storage bytes of Φ and Ψ; `timings` the phases of h.
 coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine);

@@ -38,6 +38,14 @@
 ///   penalty as it tends to infinity: the same richer coarse space, exactly zero at fixed DOFs,
 ///   without the penalty's conditioning. With Dirac refinement the restricted rows vanish and
 ///   Constrain coincides with Eliminate.
+/// - Ignore: the boundary-blind construction the paper improves on (Chen et al. 2018; Sec. 1 and
+///   Fig. 12): the hierarchy is built on the fine operator without any condition (fixed DOFs
+///   kept, no penalty; B^k stays definite, as rigid motions are not in ker C^k), and a level is
+///   constrained only when it is solved: its DOFs at the position of a fixed finest DOF
+///   (fixed_positions) are held at zero. The basis functions do not vanish at the other fixed
+///   finest DOFs, so reconstructions violate the conditions there, and the coarse model is too
+///   stiff near the fixed boundary ("spurious structural rigidity"): see "Boundary-blind
+///   construction" below. Single-level solves only (MultilevelSolver::solve_levels needs m = 1).
 /// Only homogeneous conditions are supported (the fixed values must be zero).
 ///
 /// ## Localization and truncation (Options::radius, radius_grid, truncation, invariance)
@@ -309,7 +317,7 @@
 
 namespace coarsegrain::mra {
 
-enum class DirichletTreatment { Eliminate, Penalty, DiagonalPenalty, Constrain };
+enum class DirichletTreatment { Eliminate, Penalty, DiagonalPenalty, Constrain, Ignore };
 
 /// Grid on which the localization radius rho counts rings (Sec. 3.5).
 enum class RadiusGrid {
@@ -341,7 +349,7 @@ enum class Measurement {
     Stiffness,
 };
 
-/// "dirac", "linear" / "eliminate", "penalty", "diagonal_penalty", "constrain" / "fine",
+/// "dirac", "linear" / "eliminate", "penalty", "diagonal_penalty", "constrain", "ignore" / "fine",
 /// "coarse" / "node", "cell" / "canonical", "stiffness".
 std::string refinement_name(Refinement r);
 std::string dirichlet_name(DirichletTreatment t);
@@ -430,8 +438,13 @@ struct Level {
     /// Per node of level k+1: 1 if the invariance correction was applied to its columns of C̃.
     std::vector<char> invariance_applied;
     /// Per node of level k: 1 if it lies on a fixed node of the finest grid. The invariance
-    /// correction skips the fine nodes whose columns of C̃ reach one of these (Sec. 3.5).
+    /// correction skips the fine nodes whose columns of C̃ reach one of these (Sec. 3.5). All 0
+    /// with DirichletTreatment::Ignore, whose construction does not see the conditions.
     std::vector<char> dirichlet_nodes;
+    /// DirichletTreatment::Ignore only: positions in `dofs` (sorted) of the DOFs at the position
+    /// of a fixed finest DOF (same node position and component), held at zero when level k is
+    /// solved. Empty with the other treatments, whose A^k carries the conditions.
+    IndexVector fixed;
     double build_seconds = 0;
 };
 
@@ -444,8 +457,11 @@ struct Hierarchy {
     Eigen::Vector3d origin;      ///< position of node 0
     IndexVector fine_dofs;       ///< present DOFs of level q (all but the eliminated fixed ones)
     SparseMatrix A_fine;         ///< A^q: the fine stiffness on fine_dofs (+ penalty)
-    std::vector<Level> levels;   ///< levels[k-1] is level k, k = 1..q-1
-    Timings timings;             ///< phases "level k: <phase>"
+    /// DirichletTreatment::Ignore only: positions in fine_dofs of the fixed DOFs (A_fine is then
+    /// the unconstrained stiffness on every grid DOF).
+    IndexVector fine_fixed;
+    std::vector<Level> levels;  ///< levels[k-1] is level k, k = 1..q-1
+    Timings timings;            ///< phases "level k: <phase>"
 
     int num_levels() const { return static_cast<int>(levels.size()) + 1; }
     Index fine_grid_dofs() const;
@@ -486,6 +502,21 @@ SparseMatrix basis(const Hierarchy& h, int k);
 /// u^{l+1} = C̃^{l,T} u^l for l = k..q-1 (zeros at eliminated DOFs), without Φ^k.
 /// @throws Error if k is not in 1..q or u_k has the wrong size
 Vector reconstruct(const Hierarchy& h, const Vector& u_k, int k);
+
+/// Positions of the DOFs of level k (1..q; rows of Level::A, or of A_fine for k = q) that a
+/// solve at level k holds at zero: Level::fixed or Hierarchy::fine_fixed (empty unless
+/// DirichletTreatment::Ignore).
+/// @throws Error if k is not in 1..q
+const IndexVector& fixed_positions(const Hierarchy& h, int k);
+
+/// The other positions of level k's DOFs, sorted: those a solve at level k computes.
+/// @throws Error if k is not in 1..q
+IndexVector free_positions(const Hierarchy& h, int k);
+
+/// The operator a solve at level k factorizes: Level::A (lower triangle) or A_fine (k = q,
+/// both triangles) without the rows and columns of fixed_positions(h, k).
+/// @throws Error if k is not in 1..q
+SparseMatrix free_operator(const Hierarchy& h, int k);
 
 /// Bytes of a compressed sparse matrix (values, inner and outer indices).
 std::size_t storage_bytes(const SparseMatrix& M);

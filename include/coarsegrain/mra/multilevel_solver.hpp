@@ -24,11 +24,13 @@ class MultilevelSolver {
     /// m = q (all levels) this reproduces the fine solution A^q u = g^q when the wavelets are
     /// exactly A-orthogonal to the basis (global solves, no truncation or correction: Eq. 12);
     /// with m = 1 it is the coarsest solve.
-    /// @throws Error if m is not in 1..q or g has the wrong size
+    /// @throws Error if m is not in 1..q, g has the wrong size, or m > 1 on a boundary-blind
+    ///         hierarchy (DirichletTreatment::Ignore)
     Vector solve_levels(const Vector& g_fine, int m);
     Vector solve(const Vector& g_fine) { return solve_levels(g_fine, m_h.num_levels()); }
 
-    /// Single coarse level k (Sec. 4.1): A^k u^k = g^k, u = Φ^{k,T} u^k (k = q: the fine solve).
+    /// Single coarse level k (Sec. 4.1): A^k u^k = g^k, u = Φ^{k,T} u^k (k = q: the fine solve),
+    /// with u^k = 0 at fixed_positions(h, k).
     Vector solve_level(const Vector& g_fine, int k);
 
     /// Factorizes A^k / B^k now (otherwise on first use).
@@ -36,6 +38,9 @@ class MultilevelSolver {
     void factorize_wavelets(int k);
 
   private:
+    /// u^k with A^k u^k = g^k on the free DOFs of level k and u^k = 0 at its fixed_positions.
+    Vector solve_on_level(const Vector& g, int k);
+
     const Hierarchy& m_h;
     std::vector<std::unique_ptr<solve::SpdSolver>> m_A;  ///< index k-1, k = 1..q
     std::vector<std::unique_ptr<solve::SpdSolver>> m_B;  ///< index k-1, k = 1..q-1
