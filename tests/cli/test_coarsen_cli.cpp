@@ -127,6 +127,13 @@ TEST(CliCoarsen, MethodListErrors) {
     EXPECT_EQ(r.code, 1);
     EXPECT_THAT(r.output, HasSubstr("configures no method"));
     EXPECT_FALSE(fs::exists(dir + "/out/summary.json"));
+    json blind = coarse_scene();
+    blind["coarse"]["boundary_blind"] = "yes";
+    r = cli("coarsen " + write_scene(dir, blind, "blind.json") + " --method all --out " + dir +
+            "/out");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_THAT(r.output, HasSubstr("coarse.boundary_blind: expected true or false, got \"yes\""));
+    EXPECT_FALSE(fs::exists(dir + "/out/summary.json"));
 }
 
 TEST(CliCoarsen, UnknownCoarseKeyIsNamed) {
