@@ -4,6 +4,8 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include "coarsegrain/fem/assembly.hpp"
@@ -41,8 +43,8 @@ inline GridProblem hung_problem(int dim, const Eigen::Vector3i& cells, double E_
     GridProblem p;
     const Eigen::VectorXd lo = Eigen::VectorXd::Zero(dim);
     const Eigen::VectorXd hi = size.head(dim);
-    p.mesh = mesh::make_grid(dim == 2 ? mesh::ElementType::Quad4 : mesh::ElementType::Hex8, lo,
-                             hi, cells.head(dim));
+    p.mesh = mesh::make_grid(dim == 2 ? mesh::ElementType::Quad4 : mesh::ElementType::Hex8, lo, hi,
+                             cells.head(dim));
     const Matrix centres = mesh::element_centroids(p.mesh);
     for (Index e = 0; e < p.mesh.num_elements(); ++e)
         p.mesh.material_ids[e] = pattern(centres.row(e).transpose());
@@ -85,8 +87,15 @@ inline int checker_pattern(const Eigen::VectorXd& x) {
     return s > 0 ? 1 : 0;
 }
 
+/// Test name of a (dimension, refinement) parameter: "2D_dirac", "3D_linear", ...
+inline std::string dim_refinement_label(const std::tuple<int, mra::Refinement>& p) {
+    return std::to_string(std::get<0>(p)) + "D_" + mra::refinement_name(std::get<1>(p));
+}
+
 /// ||v||_K = sqrt(v^T K v).
-inline double energy_norm(const SparseMatrix& K, const Vector& v) { return std::sqrt(v.dot(K * v)); }
+inline double energy_norm(const SparseMatrix& K, const Vector& v) {
+    return std::sqrt(v.dot(K * v));
+}
 
 /// Options for global solves without truncation or correction.
 inline mra::Options exact_options(int levels, mra::Refinement r) {

@@ -130,10 +130,7 @@ INSTANTIATE_TEST_SUITE_P(Mra, MraBoundaryBlind,
                          ::testing::Combine(::testing::Values(2, 3),
                                             ::testing::Values(Refinement::Dirac,
                                                               Refinement::Linear)),
-                         [](const auto& p) {
-                             return std::to_string(std::get<0>(p.param)) + "D_" +
-                                    refinement_name(std::get<1>(p.param));
-                         });
+                         [](const auto& p) { return test::dim_refinement_label(p.param); });
 
 }  // namespace
 }  // namespace coarsegrain::mra

@@ -65,10 +65,7 @@ INSTANTIATE_TEST_SUITE_P(Mra, MraDirichlet,
                          ::testing::Combine(::testing::Values(2, 3),
                                             ::testing::Values(Refinement::Dirac,
                                                               Refinement::Linear)),
-                         [](const auto& p) {
-                             return std::to_string(std::get<0>(p.param)) + "D_" +
-                                    refinement_name(std::get<1>(p.param));
-                         });
+                         [](const auto& p) { return test::dim_refinement_label(p.param); });
 
 // The setup: a 32x32 bimaterial square (contrast 2000) hung from its top edge under
 // gravity, coarsened to 2x2 cells (5 levels), global solves. Energy error of the coarsest level

@@ -15,7 +15,7 @@ namespace {
 using LocalizedParam = std::tuple<int, Refinement>;
 
 std::string param_name(const ::testing::TestParamInfo<LocalizedParam>& p) {
-    return std::to_string(std::get<0>(p.param)) + "D_" + refinement_name(std::get<1>(p.param));
+    return test::dim_refinement_label(p.param);
 }
 
 /// C̃^k of two hierarchies agree entry by entry on every level to `tol`.
