@@ -10,7 +10,10 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -61,6 +64,21 @@ constexpr double kSingularEigenvalueRatio = 1e-14;
 /// with the defaults, 1.41-1.76 s with these; the factor stores 11% more entries (45.0M
 /// against 40.5M), and 64, 256, 1024 stored 30% more for no further gain.
 constexpr std::array<std::size_t, 3> kSupernodeRelaxation{32, 128, 512};
+
+/// Factors below this many bytes are not checked against the available memory (reading it
+/// costs a file read; the localized solves of the hierarchy analyze thousands of small ones).
+constexpr double kMinCheckedFactorBytes = 64.0 * (1 << 20);
+
+/// MemAvailable of /proc/meminfo in bytes, or infinity where it cannot be read.
+double available_memory() {
+    std::ifstream in("/proc/meminfo");
+    std::string line;
+    while (std::getline(in, line)) {
+        double kib = 0;
+        if (std::sscanf(line.c_str(), "MemAvailable: %lf kB", &kib) == 1) return kib * 1024;
+    }
+    return std::numeric_limits<double>::infinity();
+}
 
 constexpr const char* kDirichletHint =
     "is the structure held by enough Dirichlet conditions to remove its rigid motions?";
@@ -114,6 +132,11 @@ class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
     }
     /// nnz(L) and the flop count of the factorization, from the last analysis.
     double factor_nonzeros() { return cholmod().lnz; }
+    /// Bytes of the values of the supernodal L of the last analysis (its supernodes, explicit
+    /// zeros included).
+    double factor_bytes() const {
+        return static_cast<double>(m_cholmodFactor->xsize) * sizeof(double);
+    }
     double factor_flops() { return cholmod().fl; }
     /// CHOLMOD's code (CHOLMOD_AMD, ...) of the ordering selected by its last analysis.
     int selected_ordering() { return cholmod().method[cholmod().selected].ordering; }
@@ -465,6 +488,20 @@ struct SpdSolver::Impl {
 
     std::string name() const { return backend_name(options.backend); }
 
+    /// Refuses a factor of `bytes` above options.max_factor_bytes (0: the available memory, for
+    /// factors of kMinCheckedFactorBytes and more).
+    void check_factor_memory(double bytes) const {
+        const bool given = options.max_factor_bytes > 0;
+        if (!given && bytes < kMinCheckedFactorBytes) return;
+        const double limit = given ? options.max_factor_bytes : available_memory();
+        CG_VERIFY(bytes <= limit,
+                  "solver ({}): the factor of the n = {} matrix ({} stored entries) would take "
+                  "{:.3g} GB, more than the {:.3g} GB {}; make the system smaller (e.g. more "
+                  "coarsening levels) or the memory larger",
+                  name(), n, nnz, bytes / 1e9, limit / 1e9,
+                  given ? "allowed (max_factor_bytes)" : "available (MemAvailable)");
+    }
+
     [[noreturn]] void not_positive_definite(const std::string& detail) const {
         throw NotPositiveDefinite(
             fmt::format("matrix is not positive definite (n = {}, backend {}): {} ({})", n, name(),
@@ -560,6 +597,7 @@ void SpdSolver::analyze(const SparseMatrix& A) {
                 s.cholmod.reset();
                 const double n = static_cast<double>(s.n);
                 s.stats = {"natural", n * (n + 1) / 2, n * n * n / 3};
+                s.check_factor_memory(n * n * sizeof(double));
                 break;
             }
             s.cholmod = std::make_unique<CholmodFactor>();
@@ -582,6 +620,7 @@ void SpdSolver::analyze(const SparseMatrix& A) {
                       s.n, s.nnz, s.cholmod->status());
             if (ordering.empty()) ordering = ordering_name(s.cholmod->selected_ordering());
             s.stats = {ordering, s.cholmod->factor_nonzeros(), s.cholmod->factor_flops()};
+            s.check_factor_memory(s.cholmod->factor_bytes());
             break;
         }
         case Backend::SimplicialLDLT:

@@ -12,6 +12,7 @@
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
+#include "test_util.hpp"
 
 using namespace coarsegrain;
 using solve::Backend;
@@ -353,6 +354,29 @@ TEST(SpdSolver, IndefiniteMatrixIsReported) {
 // Bad input is an Error (not NotPositiveDefinite): non-square, non-symmetric (values or
 // pattern: only the lower or the upper triangle stored), NaN and infinite entries, an empty
 // matrix.
+// A factor larger than max_factor_bytes is refused at analysis, before any numeric work, with
+// an error naming the sizes; a limit above the factor changes nothing. The 2D grid Laplacian's
+// supernodal factor (60x60 cells) takes about 0.4 MB, the dense path's copy 8 n^2 bytes.
+TEST(SpdSolver, FactorLargerThanTheMemoryLimitIsRefused) {
+    const SparseMatrix sparse = shifted(grid_laplacian(60, 2, 2.0, 15), 1e-3);
+    const SparseMatrix dense = Matrix(shifted(random_graph_laplacian(60, 2, 16), 1.0))
+                                   .unaryExpr([](double v) { return v == 0.0 ? 1e-3 : v; })
+                                   .sparseView();
+    for (const SparseMatrix* A : {&sparse, &dense}) {
+        solve::SolverOptions small;
+        small.max_factor_bytes = 1000;
+        solve::SpdSolver refusing(small);
+        test::expect_error([&] { refusing.compute(*A); },
+                           "GB allowed (max_factor_bytes); make the system smaller");
+        solve::SolverOptions large;
+        large.max_factor_bytes = 1e9;
+        solve::SpdSolver solver(large);
+        ASSERT_NO_THROW(solver.compute(*A));
+        const Vector b = Vector::Ones(A->rows());
+        EXPECT_LE((*A * solver.solve(b) - b).norm(), 1e-9 * b.norm());
+    }
+}
+
 TEST(SpdSolver, BadInputIsAnError) {
     const SparseMatrix A = shifted(random_graph_laplacian(50, 2, 14), 1.0);
     SparseMatrix rect = A.leftCols(40);

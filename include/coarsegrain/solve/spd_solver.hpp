@@ -54,6 +54,14 @@ struct SolverOptions {
     /// diagonal is an error. Node blocks (node_dofs > 1) are not detected in a lower triangle,
     /// so CHOLMOD's default ordering is used.
     bool lower_triangle = false;
+    /// cholmod: the largest factor, in bytes, a numeric factorization may allocate (the values of
+    /// the supernodal L, or of the dense copy for a dense matrix); analyze refuses a larger one
+    /// with an Error naming the sizes, instead of the operating system killing the process
+    /// partway through the factorization. 0 (default): the memory available at analysis time
+    /// (MemAvailable in /proc/meminfo; no limit where it cannot be read), checked for factors
+    /// of 64 MB and more. A two-level hierarchy on 64^3 hexes at rho = 5 (coarsest A^1:
+    /// 107,811 DOFs, 521M entries) was killed that way.
+    double max_factor_bytes = 0;
 };
 
 /// Symbolic statistics of a CHOLMOD analysis.
@@ -128,7 +136,8 @@ class SpdSolver {
     SpdSolver& operator=(SpdSolver&&) noexcept;
 
     /// Symbolic analysis (ordering) of A's pattern.
-    /// @throws Error if A is not square, empty or not compressed
+    /// @throws Error if A is not square, empty or not compressed, or (cholmod) its factor would
+    ///         exceed SolverOptions::max_factor_bytes
     void analyze(const SparseMatrix& A);
     /// Numeric factorization. Analyzes A first if it was never analyzed or its pattern differs
     /// from the analyzed one (compared by size, nonzero count and a hash of the indices).
