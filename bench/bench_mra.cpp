@@ -100,9 +100,7 @@ cg::test::GridProblem make_problem(const Eigen::Vector3i& cells, const std::stri
     return p;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
     if (argc < 4) {
         std::fprintf(
             stderr,
@@ -183,4 +181,16 @@ int main(int argc, char** argv) {
     const cg::Vector e = solver.solve_level(p.f, 1) - p.u;
     std::printf("coarsest energy error ||u^1 - u||_A / ||u||_A = %.4f\n",
                 cg::test::energy_norm(p.K, e) / cg::test::energy_norm(p.K, p.u));
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        return run(argc, argv);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "bench_mra: error: %s\n", e.what());
+        return 1;
+    }
 }

@@ -132,10 +132,13 @@ class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
     }
     /// nnz(L) and the flop count of the factorization, from the last analysis.
     double factor_nonzeros() { return cholmod().lnz; }
-    /// Bytes of the values of the supernodal L of the last analysis (its supernodes, explicit
-    /// zeros included).
+    /// Bytes the numeric factorization of the last analysis allocates: the supernodal L's
+    /// values (explicit zeros included) and row indices, and the largest update matrix of the
+    /// supernodal factorization.
     double factor_bytes() const {
-        return static_cast<double>(m_cholmodFactor->xsize) * sizeof(double);
+        const cholmod_factor& L = *m_cholmodFactor;
+        return static_cast<double>(L.xsize + L.maxcsize) * sizeof(double) +
+               static_cast<double>(L.ssize) * sizeof(int);
     }
     double factor_flops() { return cholmod().fl; }
     /// CHOLMOD's code (CHOLMOD_AMD, ...) of the ordering selected by its last analysis.
@@ -620,7 +623,9 @@ void SpdSolver::analyze(const SparseMatrix& A) {
                       s.n, s.nnz, s.cholmod->status());
             if (ordering.empty()) ordering = ordering_name(s.cholmod->selected_ordering());
             s.stats = {ordering, s.cholmod->factor_nonzeros(), s.cholmod->factor_flops()};
-            s.check_factor_memory(s.cholmod->factor_bytes());
+            // With the permuted copies of A's lower triangle CHOLMOD makes (two transposes).
+            s.check_factor_memory(s.cholmod->factor_bytes() +
+                                  (s.options.keep_order ? 0.0 : 2.0 * 12.0 * s.nnz));
             break;
         }
         case Backend::SimplicialLDLT:

@@ -306,9 +306,15 @@
 /// In (g): build 119.7 s (B 15.7 s, localized solves with C̃ 64.7 s, invariance 6.6 s, A^1
 /// 26.1 s), peak 9.0 GB; the bench's own fine reference solve peaks at 19.2 GB before. Coarsest
 /// factorize + solve 192 s + 0.67 s against 218 s + 1.0 s for the fine one (1.1x; A^1 is
-/// 107,811 DOFs with 1.9e8 nonzeros); coarsest error 0.72. At rho = 5, A^1's lower triangle
-/// alone would need ~4.3 GB and C̃ ~2.7 GB as runs (3.8 GB in CSC): with B, the transient
-/// CSC copy of C̃ and the fine problem, over 8 GB. The regions' order: METIS
+/// 107,811 DOFs with 1.9e8 nonzeros); coarsest error 0.72. At rho = 5 (measured in (g), 2
+/// threads, idle): build 516.7 s (localized solves 387.5 s, A^1 94.5 s, invariance 16.1 s, B
+/// 10.1 s), storage 7.41 GB (C̃ 3.97e8 entries, 99.55% sparse; lower triangles of A^1 2.61e8,
+/// 95.52% sparse, and B 6.6e7), build peak 20.1 GB with the bench's fine problem. The bench's
+/// fine reference factorization after the build (811,200 DOFs, 19.4 GB predicted, beside the
+/// 7.4 GB hierarchy) was then killed by the kernel at 24.3 GB (twice: 516.7 s and 507.5 s
+/// builds); SpdSolver now refuses it at the analysis (SolverOptions::max_factor_bytes). A^1
+/// (107,811 DOFs, 5.2e8 entries) was not factorized: at that size the coarsest level wants more
+/// steps. The regions' order: METIS
 /// (20-27% fewer flops at 40x20x20 in (f), same time: the small supernodes' overhead, not the
 /// flops, sets the pace; CHOLMOD's NESDIS likewise) instead of AMD took the solves
 /// of (d) at 40x20x20 from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s; AMD

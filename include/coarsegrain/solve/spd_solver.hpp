@@ -54,13 +54,14 @@ struct SolverOptions {
     /// diagonal is an error. Node blocks (node_dofs > 1) are not detected in a lower triangle,
     /// so CHOLMOD's default ordering is used.
     bool lower_triangle = false;
-    /// cholmod: the largest factor, in bytes, a numeric factorization may allocate (the values of
-    /// the supernodal L, or of the dense copy for a dense matrix); analyze refuses a larger one
+    /// cholmod: the most bytes a numeric factorization may allocate (the supernodal L, its
+    /// largest update matrix and CHOLMOD's permuted copies of A, or the dense copy for a dense
+    /// matrix), predicted by the symbolic analysis; analyze refuses a larger factorization
     /// with an Error naming the sizes, instead of the operating system killing the process
     /// partway through the factorization. 0 (default): the memory available at analysis time
     /// (MemAvailable in /proc/meminfo; no limit where it cannot be read), checked for factors
-    /// of 64 MB and more. A two-level hierarchy on 64^3 hexes at rho = 5 (coarsest A^1:
-    /// 107,811 DOFs, 521M entries) was killed that way.
+    /// of 64 MB and more. bench_mra on 64^3 hexes at rho = 5 was killed at 24.3 GB that way:
+    /// its fine factorization (811,200 DOFs, 19.4 GB predicted) beside the 7.4 GB hierarchy.
     double max_factor_bytes = 0;
 };
 
