@@ -43,9 +43,10 @@
 ///   kept, no penalty; B^k stays definite, as rigid motions are not in ker C^k), and a level is
 ///   constrained only when it is solved: its DOFs at the position of a fixed finest DOF
 ///   (fixed_positions) are held at zero. The basis functions do not vanish at the other fixed
-///   finest DOFs, so reconstructions violate the conditions there, and the coarse model is too
-///   stiff near the fixed boundary ("spurious structural rigidity"): see "Boundary-blind
-///   construction" below. Single-level solves only (MultilevelSolver::solve_levels needs m = 1).
+///   finest DOFs, so reconstructions violate the conditions there, and the coarse model is
+///   wrong near the fixed boundary: too stiff with linear refinement (Fig. 12's "spurious
+///   structural rigidity"), too soft with Dirac: see "Boundary-blind construction" below.
+///   Single-level solves only (MultilevelSolver::solve_levels needs m = 1).
 ///
 /// ## Boundary-blind construction (DirichletTreatment::Ignore)
 /// Chen et al. 2018 build their coarse shape functions without the Dirichlet conditions and fix
