@@ -313,7 +313,8 @@
 /// 95.52% sparse, and B 6.6e7), build peak 20.1 GB with the bench's fine problem. The bench's
 /// fine reference factorization after the build (811,200 DOFs, 19.4 GB predicted, beside the
 /// 7.4 GB hierarchy) was then killed by the kernel at 24.3 GB (twice: 516.7 s and 507.5 s
-/// builds); SpdSolver now refuses it at the analysis (SolverOptions::max_factor_bytes). A^1
+/// builds); SpdSolver now refuses it at the analysis (SolverOptions::max_factor_bytes; third
+/// run, 513.7 s: "19.4 GB, more than the 9.02 GB available", exit code 1). A^1
 /// (107,811 DOFs, 5.2e8 entries) was not factorized: at that size the coarsest level wants more
 /// steps. The regions' order: METIS
 /// (20-27% fewer flops at 40x20x20 in (f), same time: the small supernodes' overhead, not the
