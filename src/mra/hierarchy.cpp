@@ -238,22 +238,22 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                           options.dirichlet == DirichletTreatment::DiagonalPenalty;
     {
         const Phase phase("level " + std::to_string(q) + ": fine operator", &h.timings);
+        const bool keep_fixed = penalize || blind;  // the fixed DOFs stay in A^q
         std::vector<Index> present;
         for (Index d = 0; d < n_dofs; ++d)
-            if (penalize || blind || !fixed[static_cast<std::size_t>(d)]) present.push_back(d);
+            if (keep_fixed || !fixed[static_cast<std::size_t>(d)]) present.push_back(d);
         h.fine_dofs =
             Eigen::Map<const IndexVector>(present.data(), static_cast<Index>(present.size()));
-        if (blind) {
-            h.A_fine = K;
-            h.A_fine.makeCompressed();
+        if (blind)
             h.fine_fixed = Eigen::Map<const IndexVector>(fixed_dofs.data(),
                                                          static_cast<Index>(fixed_dofs.size()));
-        } else if (penalize) {
+        if (keep_fixed) {
             h.A_fine = K;
-            for (const Index d : fixed_dofs)
-                h.A_fine.coeffRef(d, d) += options.dirichlet == DirichletTreatment::Penalty
-                                               ? options.penalty
-                                               : options.penalty * K.coeff(d, d);
+            if (penalize)
+                for (const Index d : fixed_dofs)
+                    h.A_fine.coeffRef(d, d) += options.dirichlet == DirichletTreatment::Penalty
+                                                   ? options.penalty
+                                                   : options.penalty * K.coeff(d, d);
             h.A_fine.makeCompressed();
         } else {
             h.A_fine = principal_submatrix(K, h.fine_dofs);
