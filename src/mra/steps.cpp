@@ -33,22 +33,22 @@ constexpr Index kMinParallelColumns = 4096;
 
 /// Local systems up to kDenseLocalLimit unknowns, or up to kDenseLocalMax with more than
 /// kDenseLocalDensity of their entries nonzero, are factorized densely (LAPACK), others by
-/// CHOLMOD's supernodal Cholesky (one BLAS thread per OpenMP thread), in an AMD order the
-/// region builds its system in (no permuted copies inside CHOLMOD), order and symbolic analysis
-/// reused across regions of the same pattern (solve_region). Measured (bench_mra, checker,
-/// 2 threads, localized solves): 24^3 cells, rho = 2 fine rings (regions of 400-1000 unknowns)
-/// 10.5 s with Eigen's simplicial LLT from 400 unknowns (re-ordered per region) and 3.8 s with
-/// CHOLMOD from 100; 32^3: 24.9 s against 9.6 s. The dense bounds: 100 against 400 unknowns
-/// gave 0.84 s against 1.10 s on 24x12x12, 3 levels, rho = 2 (5.0 s against 5.5 s at rho = 5);
-/// the density 0.25 against 0.5 and never dense gave 0.59 / 0.81 / 0.73 s for the coarse step
-/// of 24x12x12 and 5.3 / 4.7 / 5.9 s for that of 32x16x16 (3 levels, rho = 5: B^1 regions of
-/// ~1000-6000 unknowns, ~25-55% dense), equal within this machine's +-10%.
+/// CHOLMOD's supernodal Cholesky (one BLAS thread per OpenMP thread), in a fill-reducing order
+/// of the node graph (solve::fill_reducing_order) the region builds its system in (no permuted
+/// copies inside CHOLMOD), order and symbolic analysis reused across regions of the same pattern
+/// (solve_region). Measured (bench_mra, checker, 2 threads, localized solves): 24^3 cells, rho = 2
+/// fine rings (regions of 400-1000 unknowns) 10.5 s with Eigen's simplicial LLT from 400 unknowns
+/// (re-ordered per region) and 3.8 s with CHOLMOD from 100; 32^3: 24.9 s against 9.6 s. The dense
+/// bounds: 100 against 400 unknowns gave 0.84 s against 1.10 s on 24x12x12, 3 levels, rho = 2 (5.0
+/// s against 5.5 s at rho = 5); the density 0.25 against 0.5 and never dense gave 0.59 / 0.81 /
+/// 0.73 s for the coarse step of 24x12x12 and 5.3 / 4.7 / 5.9 s for that of 32x16x16 (3 levels, rho
+/// = 5: B^1 regions of ~1000-6000 unknowns, ~25-55% dense), equal within this machine's +-10%.
 constexpr Index kDenseLocalLimit = 100;
 constexpr Index kDenseLocalMax = 4000;
 constexpr double kDenseLocalDensity = 0.25;
 
-/// Options of the local CHOLMOD factorizations: in the AMD order the caller applied (keep_order;
-/// AMD alone, as METIS costs more than it saves on many small systems), without input checks:
+/// Options of the local CHOLMOD factorizations: in the order the caller applied (keep_order),
+/// without input checks:
 /// the systems are principal submatrices of the symmetrized B^k, made of the fine stiffness that
 /// build_hierarchy checked.
 solve::SolverOptions local_options() {
@@ -58,7 +58,7 @@ solve::SolverOptions local_options() {
     return options;
 }
 
-/// A fill-reducing order of a region's local system B[S, S] (AMD, postordered), kept for the
+/// A fill-reducing order of a region's local system B[S, S] (postordered), kept for the
 /// next region of the same pattern: n, nnz and hash of its (row, column) pairs in S's order.
 struct LocalOrder {
     Index n = -1;
@@ -252,11 +252,12 @@ void principal_block(const SparseMatrix& B, const std::vector<Index>& S,
 
 /// Solves B[S, S] x = rhs (rhs in S's order) with the calling thread's scratch: densely
 /// (LAPACK) when small or dense, else by CHOLMOD in the fill-reducing order of the last region
-/// of the same pattern at this growth step (`attempt`), or a new AMD order. local[w] is the
-/// position of wavelet w in S or -1.
+/// of the same pattern at this growth step (`attempt`), or a new order of its node graph (the
+/// wavelets of a level-(k+1) node, up to dim of them, are consecutive in S and share their
+/// pattern). local[w] is the position of wavelet w in S or -1.
 Matrix solve_region(const SparseMatrix& B, const std::vector<Index>& S,
-                    const std::vector<Index>& local, const Matrix& rhs, RegionScratch& scratch,
-                    std::size_t attempt) {
+                    const std::vector<Index>& local, const Matrix& rhs, int dim,
+                    RegionScratch& scratch, std::size_t attempt) {
     const Index ns = static_cast<Index>(S.size());
     const auto [nnz, hash] = block_pattern(B, S, local);
     const double n = static_cast<double>(ns);
@@ -275,7 +276,7 @@ Matrix solve_region(const SparseMatrix& B, const std::vector<Index>& S,
     LocalOrder& order = scratch.orders[attempt];
     if (order.n != ns || order.nnz != nnz || order.hash != hash) {
         principal_block(B, S, local, nnz, nullptr, scratch.b);
-        const IndexVector perm = solve::amd_order(scratch.b);
+        const IndexVector perm = solve::fill_reducing_order(scratch.b, dim);
         order = {ns, nnz, hash, std::vector<Index>(perm.begin(), perm.end()),
                  std::vector<Index>(static_cast<std::size_t>(ns))};
         for (Index k = 0; k < ns; ++k) order.position[static_cast<std::size_t>(perm[k])] = k;
@@ -520,7 +521,7 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
                     const Index l = local[static_cast<std::size_t>(it.row())];
                     if (l >= 0) rhs(l, q) = it.value();
                 }
-            x = ns > 0 ? solve_region(B, S, local, rhs, scratch, attempt) : Matrix(0, nr);
+            x = ns > 0 ? solve_region(B, S, local, rhs, dim, scratch, attempt) : Matrix(0, nr);
             for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
             if (ns == 0) break;  // no wavelet near: the rows are C^†'s
             const bool whole = (lo.array() == 0).all() && (hi.array() == nf.array() - 1).all();
@@ -641,7 +642,7 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
             if (s >= 0) rhs.row(s) = rt.row(r);
         }
         Matrix x;
-        if (ns > 0) x = solve_region(B, S, local, rhs, scratch, 0);
+        if (ns > 0) x = solve_region(B, S, local, rhs, dim, scratch, 0);
         for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
         if (ns == 0) return;
         append_solution(x, std::vector<Index>(crows.begin(), crows.end()), S,

@@ -105,12 +105,6 @@ class CholmodFactor : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
         m_analysisIsOk = true;
         m_factorizationIsOk = false;
     }
-    /// The next analyzePattern orders with AMD alone (CHOLMOD's default also tries METIS when
-    /// AMD's fill is large).
-    void use_amd_only() {
-        cholmod().nmethods = 1;
-        cholmod().method[0].ordering = CHOLMOD_AMD;
-    }
     /// The next analyzePattern keeps A's order, without postordering: factorizations then read
     /// A's lower triangle in place (no permuted copies).
     void use_natural_order() {
@@ -443,13 +437,20 @@ Matrix DenseCholesky::solve(const Matrix& b) const {
     return x;
 }
 
-IndexVector amd_order(const SparseMatrix& A) {
+IndexVector fill_reducing_order(const SparseMatrix& A, int node_dofs) {
     CG_VERIFY(A.rows() == A.cols() && A.isCompressed(),
-              "amd_order: the matrix must be square and compressed, got {} by {}", A.rows(),
-              A.cols());
+              "fill_reducing_order: the matrix must be square and compressed, got {} by {}",
+              A.rows(), A.cols());
+    CG_VERIFY(node_dofs >= 1, "fill_reducing_order: node_dofs must be at least 1, got {}",
+              node_dofs);
     if (A.rows() == 0) return {};
+    const std::vector<Index> start = column_groups(A, node_dofs);
     const std::vector<int> perm =
-        order_pattern(A.rows(), A.outerIndexPtr(), A.innerIndexPtr(), {CHOLMOD_AMD}).first;
+        static_cast<Index>(start.size()) - 1 < A.rows()
+            ? group_ordering(A, start).first
+            : order_pattern(A.rows(), A.outerIndexPtr(), A.innerIndexPtr(),
+                            {CHOLMOD_AMD, CHOLMOD_METIS})
+                  .first;
     return Eigen::Map<const IndexVector>(perm.data(), A.rows());
 }
 
@@ -614,7 +615,6 @@ void SpdSolver::analyze(const SparseMatrix& A) {
                 s.cholmod->analyze_permuted(A, perm);
                 ordering = std::move(name);
             } else {
-                if (s.options.amd_only) s.cholmod->use_amd_only();
                 s.cholmod->analyzePattern(A);  // no node blocks: CHOLMOD's default ordering
             }
             CG_VERIFY(s.cholmod->has_factor() && s.cholmod->status() >= 0,

@@ -264,6 +264,10 @@
 /// Z W, which took ~1 s), and B symmetrized in place.
 /// Peak = the bench's high-water mark (fine problem and its solve included; (c) patch 2 was
 /// measured before the last two changes, which took patch 1 from 1393 to 1261 MB).
+/// (h) session 17: the regions ordered on their node graph (the dim wavelets of a node
+/// together) by AMD or METIS, whichever fills less (solve::fill_reducing_order), instead of
+/// AMD on the scalar graph: an interior Dirac region (3,345 unknowns) needs 1.1e8 flops
+/// instead of 1.9e8, and ordering the node graph costs a third of the scalar METIS.
 ///
 /// | patch | row | build s | solves s | A^1 s | storage MB | peak MB | coarsest error |
 /// |-------|-----|---------|----------|-------|------------|---------|----------------|
@@ -280,6 +284,14 @@
 /// | 2     | (f) | 20.7    | 9.6      | 6.6   | 470        | 1848    | 0.48           |
 /// | 1     | (g) | 29.6-31.0 | 23.0-24.0 | 4.6-4.7 | 363    | 1139-1153 | 0.58         |
 /// | 2     | (g) | 17.3    | 9.1      | 5.9   | 470        | 1450    | 0.48           |
+/// | 1     | (h) | 22.8    | 17.6     | 3.7   | 363        | 1129    | 0.58           |
+/// | 2     | (h) | 14.1    | 7.0      | 4.9   | 470        | 1446    | 0.48           |
+///
+/// The Dirac refinement in the same setting (its B^1 is 99.86% sparse, the shark's figure in
+/// Table 1): (h) patch 1 build 13.4 s (solves 10.2 s, 15.9 s with the scalar AMD order of (g);
+/// A^1 2.1 s), storage 239 MB, peak 820 MB, coarsest error 0.79; patch 2 10.0 s (solves 5.1 s,
+/// A^1 3.2 s), 361 MB, peak 1151 MB, error 0.76. Both meet the 15 s and 390 MB; the
+/// linear refinement meets one or the other (patch 2 / patch 1).
 ///
 /// The paper's 18K-node hex model is not a solid box: the shark has 18,234 nodes for ~10K
 /// hexes and 3,317 coarse nodes, i.e. it is mostly 1-2 elements thick, and its C^1 is 2.2%
@@ -316,15 +328,13 @@
 /// builds); SpdSolver now refuses it at the analysis (SolverOptions::max_factor_bytes; third
 /// run, 513.7 s: "19.4 GB, more than the 9.02 GB available", exit code 1). A^1
 /// (107,811 DOFs, 5.2e8 entries) was not factorized: at that size the coarsest level wants more
-/// steps. The regions' order: METIS
-/// (20-27% fewer flops at 40x20x20 in (f), same time: the small supernodes' overhead, not the
-/// flops, sets the pace; CHOLMOD's NESDIS likewise) instead of AMD took the solves
-/// of (d) at 40x20x20 from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s; AMD
-/// stays.
+/// steps. The regions' order: METIS on the scalar graph took the solves of (d) at 40x20x20
+/// from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s (its ordering time); on
+/// the node graph (h) it costs 3x less, and 24^3, rho = 2 went from 3.0-3.4 s to 2.6-2.9 s.
 /// Where the time goes at patch 1 (perf, (d)): the 2,541 local CHOLMOD factorizations (~3,500
 /// unknowns, 2e8 flops each) are mostly BLAS (dgemm and its copies: ~35% of the build's CPU
 /// time); CHOLMOD's permuted transposes of the input, 25% of the solves in (c), are gone, and
-/// ~21% of the regions (the clipped ones at the boundary) have a new pattern and pay an AMD
+/// ~21% of the regions (the clipped ones at the boundary) have a new pattern and pay an
 /// order and a symbolic analysis. The Galerkin product A^1 takes ~11%, building B[S, S] 3%. A^1
 /// is 36% dense: its factorization (2.7 s) is slower than the fine one (1.6 s) at this radius.
 /// Three levels (bench_mra NX NY NZ 3 ...), coarsest factorize + solve against the fine one in

@@ -31,11 +31,6 @@ struct SolverOptions {
     /// default ordering is used: AMD, then METIS on A itself when AMD's fill is large. Matrices
     /// with over 90% of their entries stored keep their own order, whatever the options.
     int node_dofs = 1;
-    /// cholmod without node blocks: order with AMD alone instead of CHOLMOD's default (AMD, then
-    /// METIS if AMD's fill is large). For many small systems, where METIS costs more than its
-    /// smaller fill saves: the hierarchy's localized solves (24x12x12 hex grid, rho = 5, ~1000-4000
-    /// unknowns each) took 7.8 s against 10.8 s.
-    bool amd_only = false;
     /// cholmod: A is already in a fill-reducing, postordered order (the caller applied the
     /// permutation() of an earlier analysis of its pattern): CHOLMOD keeps A's order and reads
     /// its lower triangle in place, without the two permuted transposes per factorization that
@@ -97,12 +92,13 @@ class DenseCholesky {
     bool m_ok = false;
 };
 
-/// Fill-reducing order of the pattern of a symmetric A (lower triangle read, rows sorted):
-/// CHOLMOD's AMD followed by its elimination-tree postorder (new column k = old perm[k]), the
-/// order SpdSolver's amd_only analysis uses, without its supernodal analysis. For
-/// SolverOptions::keep_order.
-/// @throws Error if A is not square and compressed
-IndexVector amd_order(const SparseMatrix& A);
+/// Fill-reducing order of the pattern of a symmetric A (both triangles stored, rows sorted), for
+/// SolverOptions::keep_order: CHOLMOD's AMD and METIS, whichever gives the smaller factor
+/// nnz(L), followed by the elimination-tree postorder (new column k = old perm[k]). With
+/// node_dofs > 1 they order the graph of nodes (runs of up to node_dofs consecutive columns with
+/// identical patterns), as SpdSolver's analysis does, and each node is expanded to its columns.
+/// @throws Error if A is not square and compressed, or node_dofs < 1
+IndexVector fill_reducing_order(const SparseMatrix& A, int node_dofs = 1);
 
 /// Symmetric positive-definite sparse solver that keeps its factorization: factorize once,
 /// solve many right-hand sides. Checks that the matrix is square, finite and symmetric, and
