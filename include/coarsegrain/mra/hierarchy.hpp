@@ -328,7 +328,18 @@
 /// builds); SpdSolver now refuses it at the analysis (SolverOptions::max_factor_bytes; third
 /// run, 513.7 s: "19.4 GB, more than the 9.02 GB available", exit code 1). A^1
 /// (107,811 DOFs, 5.2e8 entries) was not factorized: at that size the coarsest level wants more
-/// steps. The regions' order: METIS on the scalar graph took the solves of (d) at 40x20x20
+/// steps.
+/// Growth with the Dirac refinement in (h) (rho = 5, patch 1, 2 threads; nodes: build s
+/// (localized solves, A^1), storage, coarsest error; the same run repeated varies by up to 25%
+/// here): 15,625 (24^3): 13.0 s (10.1, 1.8), 211 MB, 0.75; 18,081 (40x20x20): 13.4 s, 239 MB,
+/// 0.79; 35,937 (32^3): 30.0-37.8 s (22.6-28.2, 4.9-6.4), 542 MB, 0.70; 117,649 (48^3): 123.9 s
+/// (92.8, 21.5), 1.99 GB, build peak 6.1 GB, 0.63; 274,625 (64^3): 352.9 s (274.0, 54.8;
+/// invariance 13.7), 4.90 GB (C̃ 3.07e8 entries, 99.64% sparse; A^1's lower triangle 1.6e8,
+/// 97.06% sparse; B's 2.4e7), build peak 14.8 GB. From 32^3 to 64^3 (7.6x the nodes) the build
+/// grows 9.3-11.8x: a region's factorization and solve take 9-15 ms per thread, longer on the
+/// larger grids. The 64^3 coarsest operator (104,544 DOFs) would need an 18.6 GB factor, which
+/// the memory guard refused next to the hierarchy (13.8 GB available); bench_mra now runs its
+/// fine reference (factorize 315 s + solve 5.2 s at 64^3) before the build and frees it. The regions' order: METIS on the scalar graph took the solves of (d) at 40x20x20
 /// from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s (its ordering time); on
 /// the node graph (h) it costs 3x less, and 24^3, rho = 2 went from 3.0-3.4 s to 2.6-2.9 s.
 /// Where the time goes at patch 1 (perf, (d)): the 2,541 local CHOLMOD factorizations (~3,500
