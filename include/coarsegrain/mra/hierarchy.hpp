@@ -291,7 +291,10 @@
 /// Table 1): (h) patch 1 build 13.4 s (solves 10.2 s, 15.9 s with the scalar AMD order of (g);
 /// A^1 2.1 s), storage 239 MB, peak 820 MB, coarsest error 0.79; patch 2 10.0 s (solves 5.1 s,
 /// A^1 3.2 s), 361 MB, peak 1151 MB, error 0.76. Both meet the 15 s and 390 MB; the
-/// linear refinement meets one or the other (patch 2 / patch 1).
+/// linear refinement meets one or the other (patch 2 / patch 1). Global solves with the Dirac
+/// refinement: build 108 s (solves 43 s, A^1 63 s), 1.47 GB, coarsest error 0.596; so rho = 5
+/// costs the Dirac construction 1.32x its global error here (patch 2: 1.27x), against 3.4x for
+/// the linear one (0.58 against 0.17), whose global construction is 3.5x more accurate.
 ///
 /// The paper's 18K-node hex model is not a solid box: the shark has 18,234 nodes for ~10K
 /// hexes and 3,317 coarse nodes, i.e. it is mostly 1-2 elements thick, and its C^1 is 2.2%
@@ -335,8 +338,8 @@
 /// 0.79; 35,937 (32^3): 30.0-37.8 s (22.6-28.2, 4.9-6.4), 542 MB, 0.70; 117,649 (48^3): 123.9 s
 /// (92.8, 21.5), 1.99 GB, build peak 6.1 GB, 0.63; 274,625 (64^3): 352.9 s (274.0, 54.8;
 /// invariance 13.7), 4.90 GB (C̃ 3.07e8 entries, 99.64% sparse; A^1's lower triangle 1.6e8,
-/// 97.06% sparse; B's 2.4e7), build peak 14.8 GB. From 32^3 to 64^3 (7.6x the nodes) the build
-/// grows 9.3-11.8x: a region's factorization and solve take 9-15 ms per thread, longer on the
+/// 97.06% sparse; B's 2.4e7), build peak 14.8 GB; a second run 334.3 s (solves 246.8 s, A^1
+/// 60.6 s, invariance 16.5 s). From 32^3 to 64^3 (7.6x the nodes) the build grows 8.8-11.8x: a region's factorization and solve take 9-15 ms per thread, longer on the
 /// larger grids. The 64^3 coarsest operator (104,544 DOFs) would need an 18.6 GB factor, which
 /// the memory guard refused next to the hierarchy (13.8 GB available); bench_mra now runs its
 /// fine reference (factorize 315 s + solve 5.2 s at 64^3) before the build and frees it. The regions' order: METIS on the scalar graph took the solves of (d) at 40x20x20
