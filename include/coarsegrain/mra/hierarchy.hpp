@@ -267,7 +267,7 @@
 /// (h) session 17: the regions ordered on their node graph (the dim wavelets of a node
 /// together) by AMD or METIS, whichever fills less (solve::fill_reducing_order), instead of
 /// AMD on the scalar graph: an interior Dirac region (3,345 unknowns) needs 1.1e8 flops
-/// instead of 1.9e8, and ordering the node graph costs a third of the scalar METIS.
+/// instead of 1.9e8, and ordering the node graph costs about half the scalar METIS.
 ///
 /// | patch | row | build s | solves s | A^1 s | storage MB | peak MB | coarsest error |
 /// |-------|-----|---------|----------|-------|------------|---------|----------------|
@@ -288,7 +288,7 @@
 /// | 2     | (h) | 14.1    | 7.0      | 4.9   | 470        | 1446    | 0.48           |
 ///
 /// The Dirac refinement in the same setting (its B^1 is 99.86% sparse, the shark's figure in
-/// Table 1): (h) patch 1 build 13.4 s (solves 10.2 s, 15.9 s with the scalar AMD order of (g);
+/// Table 1): (h) patch 1 build 13.4 s (solves 10.2 s, 14.7-15.9 s with the scalar AMD order of (g);
 /// A^1 2.1 s), storage 239 MB, peak 820 MB, coarsest error 0.79; patch 2 10.0 s (solves 5.1 s,
 /// A^1 3.2 s), 361 MB, peak 1151 MB, error 0.76. Both meet the 15 s and 390 MB; the
 /// linear refinement meets one or the other (patch 2 / patch 1). Global solves with the Dirac
@@ -339,12 +339,15 @@
 /// (92.8, 21.5), 1.99 GB, build peak 6.1 GB, 0.63; 274,625 (64^3): 352.9 s (274.0, 54.8;
 /// invariance 13.7), 4.90 GB (C̃ 3.07e8 entries, 99.64% sparse; A^1's lower triangle 1.6e8,
 /// 97.06% sparse; B's 2.4e7), build peak 14.8 GB; a second run 334.3 s (solves 246.8 s, A^1
-/// 60.6 s, invariance 16.5 s). From 32^3 to 64^3 (7.6x the nodes) the build grows 8.8-11.8x: a region's factorization and solve take 9-15 ms per thread, longer on the
-/// larger grids. The 64^3 coarsest operator (104,544 DOFs) would need an 18.6 GB factor, which
-/// the memory guard refused next to the hierarchy (13.8 GB available); bench_mra now runs its
-/// fine reference (factorize 315 s + solve 5.2 s at 64^3) before the build and frees it. The regions' order: METIS on the scalar graph took the solves of (d) at 40x20x20
-/// from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s (its ordering time); on
-/// the node graph (h) it costs 3x less, and 24^3, rho = 2 went from 3.0-3.4 s to 2.6-2.9 s.
+/// 60.6 s, invariance 16.5 s). From 32^3 to 64^3 (7.6x the nodes) the build grows 8.8-11.8x:
+/// a region's factorization and solve take 9-15 ms per thread, longer on the larger grids. The
+/// 64^3 coarsest operator (104,544 DOFs) would need an 18.6 GB factor, which the memory guard
+/// refused next to the hierarchy (13.8 GB available); bench_mra now runs its fine reference
+/// (factorize 315 s + solve 5.2 s at 64^3) before the build and frees it.
+/// The regions' order: METIS on the scalar graph took the solves of (d) at 40x20x20 from 22.0
+/// to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s (its ordering time); on the node
+/// graph (h) ordering costs about half (40x20x20: 0.95 against 1.69 CPU-s with Dirac, 1.58
+/// against 4.17 with linear refinement), and 24^3, rho = 2 went from 3.0-3.4 s to 2.6-2.9 s.
 /// Where the time goes at patch 1 (perf, (d)): the 2,541 local CHOLMOD factorizations (~3,500
 /// unknowns, 2e8 flops each) are mostly BLAS (dgemm and its copies: ~35% of the build's CPU
 /// time); CHOLMOD's permuted transposes of the input, 25% of the solves in (c), are gone, and
