@@ -48,9 +48,8 @@ constexpr Index kDenseLocalMax = 4000;
 constexpr double kDenseLocalDensity = 0.25;
 
 /// Options of the local CHOLMOD factorizations: in the order the caller applied (keep_order),
-/// without input checks:
-/// the systems are principal submatrices of the symmetrized B^k, made of the fine stiffness that
-/// build_hierarchy checked.
+/// without input checks: the systems are principal submatrices of the symmetrized B^k, made of
+/// the fine stiffness that build_hierarchy checked.
 solve::SolverOptions local_options() {
     solve::SolverOptions options;
     options.keep_order = true;
