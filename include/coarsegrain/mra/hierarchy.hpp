@@ -339,8 +339,12 @@
 /// (92.8, 21.5), 1.99 GB, build peak 6.1 GB, 0.63; 274,625 (64^3): 352.9 s (274.0, 54.8;
 /// invariance 13.7), 4.90 GB (C̃ 3.07e8 entries, 99.64% sparse; A^1's lower triangle 1.6e8,
 /// 97.06% sparse; B's 2.4e7), build peak 14.8 GB; a second run 334.3 s (solves 246.8 s, A^1
-/// 60.6 s, invariance 16.5 s). From 32^3 to 64^3 (7.6x the nodes) the build grows 8.8-11.8x:
-/// a region's factorization and solve take 9-15 ms per thread, longer on the larger grids. The
+/// 60.6 s, invariance 16.5 s); after the invariance correction lost its per-entry heap
+/// allocations (session 17), 305.6 s (solves 237.6 s, A^1 52.6 s, invariance 5.1 s); before
+/// that, with glibc's malloc thresholds raised (GLIBC_TUNABLES mmap_threshold and
+/// trim_threshold; the library sets neither) 302.3 s, B 1.7 s instead of 4.0-4.6 s. From 32^3
+/// to 64^3 (7.6x the nodes) the build grows 8.8-11.8x: a region's factorization and solve take
+/// 9-15 ms per thread, longer on the larger grids. The
 /// 64^3 coarsest operator (104,544 DOFs) would need an 18.6 GB factor, which the memory guard
 /// refused next to the hierarchy (13.8 GB available); bench_mra now runs its fine reference
 /// (factorize 315 s + solve 5.2 s at 64^3) before the build and frees it.
