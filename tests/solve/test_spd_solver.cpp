@@ -69,15 +69,22 @@ SparseMatrix grid_laplacian(int cells, int dim, double contrast, unsigned seed) 
     return from_triplets(n, t);
 }
 
-// L kron I_k: the pattern of a k-component (elasticity-like) operator whose kernel holds the
-// k constant "translations", like a structure without Dirichlet conditions.
-SparseMatrix kron_identity(const SparseMatrix& L, int k) {
+// L kron M (M small and dense; its zeros are not stored).
+SparseMatrix kron(const SparseMatrix& L, const Matrix& M) {
+    const Index k = M.rows();
     Triplets t;
     for (Index j = 0; j < L.outerSize(); ++j)
         for (SparseMatrix::InnerIterator it(L, j); it; ++it)
-            for (int c = 0; c < k; ++c) t.emplace_back(k * it.row() + c, k * j + c, it.value());
+            for (Index c = 0; c < k; ++c)
+                for (Index d = 0; d < k; ++d)
+                    if (M(c, d) != 0.0)
+                        t.emplace_back(k * it.row() + c, k * j + d, it.value() * M(c, d));
     return from_triplets(k * static_cast<Index>(L.rows()), t);
 }
+
+// L kron I_k: the pattern of a k-component (elasticity-like) operator whose kernel holds the
+// k constant "translations", like a structure without Dirichlet conditions.
+SparseMatrix kron_identity(const SparseMatrix& L, int k) { return kron(L, Matrix::Identity(k, k)); }
 
 // Keeps only the rows and columns not in `fixed` (what Dirichlet conditions do to K).
 SparseMatrix remove_dofs(const SparseMatrix& A, const std::vector<Index>& fixed) {
@@ -588,14 +595,10 @@ TEST(SpdSolver, KeepOrderFactorizesInTheCallersFillReducingOrder) {
     for (const int node_dofs : {1, 3}) {
         SCOPED_TRACE(node_dofs);
         const SparseMatrix L = shifted(grid_laplacian(node_dofs == 1 ? 12 : 8, 3, 1.0, 31), 0.5);
-        Triplets t;  // L kron M, M = [2 on the diagonal, 0.5 off it]: SPD, nodes coupled
-        for (Index j = 0; j < L.outerSize(); ++j)
-            for (SparseMatrix::InnerIterator it(L, j); it; ++it)
-                for (int c = 0; c < node_dofs; ++c)
-                    for (int d = 0; d < node_dofs; ++d)
-                        t.emplace_back(node_dofs * it.row() + c, node_dofs * j + d,
-                                       it.value() * (c == d ? 2.0 : 0.5));
-        const SparseMatrix A = from_triplets(node_dofs * static_cast<Index>(L.rows()), t);
+        // L kron M, M = 2 on the diagonal and 0.5 off it: SPD, a node's components coupled.
+        const Matrix M = Matrix::Constant(node_dofs, node_dofs, 0.5) +
+                         1.5 * Matrix::Identity(node_dofs, node_dofs);
+        const SparseMatrix A = kron(L, M);
         const Index n = A.rows();
         const IndexVector perm = solve::fill_reducing_order(A, node_dofs);
         ASSERT_TRUE(is_permutation_of_range(perm, n));
