@@ -26,11 +26,11 @@ struct StepGeometry {
 
 /// C̃ = C^† + Z W (Eq. 11) with Z from global solves (Algorithm 1 line 3: B Z^T = -R,
 /// R = W A C^{†,T}), one CHOLMOD factorization of B and blocks of columns of R, each block's rows
-/// of C̃ truncated (row-relative, as truncate_rows with tau; 0: none) before they are stored, so
-/// that neither Z nor C̃ is ever held densely. #coarse_dofs by #fine_dofs.
+/// of C̃ truncated (as truncate_rows with tau and g.fine_dofs; 0: none) before they are stored,
+/// so that neither Z nor C̃ is ever held densely. #coarse_dofs by #fine_dofs.
 SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix& R,
                                        const SparseMatrix& C_dagger, const SparseMatrix& W,
-                                       double tau);
+                                       double tau, const StepGeometry& g);
 
 /// Rings of the localized solves' regions (on level k+1): `start`, and with defect_tolerance
 /// > 0, doubled per region (up to `max`) until the Eq. 12 defect of its rows falls below it.
@@ -111,8 +111,13 @@ SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dag
                                 const StepGeometry& g, const Matrix& rig_fine,
                                 const Matrix& fine_positions, double rotation_scale);
 
-/// Drops entries with |M_ij| < tau max_l |M_il| (row-relative).
-void truncate_rows(SparseMatrix& M, double tau);
+/// Truncation of C̃ by nodes of its columns (row-relative): the entries of row i at the DOFs of
+/// one level-(k+1) node (columns, fine_dofs[j] / dim the node of column j) are dropped together
+/// when all of them are below tau max_l |M_il|; exact zeros are dropped. The d entries of a row at
+/// a node are one row of the paper's d x d coefficient C̃_ij; dropping them together keeps the
+/// columns of a node in one pattern, which the run storage of C̃ (RunMatrix) and the Galerkin
+/// product take at once.
+void truncate_rows(SparseMatrix& M, double tau, const IndexVector& fine_dofs, int dim);
 
 /// Rigid motions of the finest grid on its present DOFs: dim translations, then the
 /// infinitesimal rotations about the origin (1 in 2D: u = (-y, x); 3 in 3D: u = omega x x), with

@@ -349,7 +349,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         SparseMatrix Ct;  // C̃^k while it is built and used here; kept as L.C_adapted (runs)
         if (std::isinf(L.radius)) {
             const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
-            Ct = detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation);
+            Ct = detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation, g);
         } else if (by_cell) {
             SparseMatrix Z;
             {
@@ -400,7 +400,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
 
         if (options.truncation > 0) {
             const Phase phase(tag + "truncation", &h.timings);
-            detail::truncate_rows(Ct, options.truncation);
+            detail::truncate_rows(Ct, options.truncation, dofs_next, dim);
         }
         if (options.invariance) {
             const Phase phase(tag + "invariance", &h.timings);

@@ -31,6 +31,10 @@ SparseMatrix symmetrized(const SparseMatrix& M);
 /// against 17.9 s and 2.2 GB for column-by-column Gustavson products, which stream C̃ from memory
 /// once per column of the result and hold X M^T. With global solves there (C̃ 132M entries, 32%
 /// dense, too large for the dense product) A^1 took 97.7 s by columns and 80.6 s with the rows.
+/// By columns, a run of consecutive columns with one pattern (a node's DOFs) is taken at once,
+/// so that each row of the accumulator is read and written once per run instead of once per
+/// column: 32^3 hexes, Dirac, rho = 5, A^1 4.9 s -> 4.35 s, and 3.46 s once the truncation kept
+/// a node's columns in one pattern (truncate_rows); 64^3: 62.4 s -> 40.7 s for both.
 SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
                         const std::vector<IndexVector>& groups);
 

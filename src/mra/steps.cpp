@@ -89,7 +89,7 @@ struct RegionScratch {
 
 SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix& R,
                                        const SparseMatrix& C_dagger, const SparseMatrix& W,
-                                       double tau) {
+                                       double tau, const StepGeometry& g) {
     solve::SpdSolver solver;
     solver.compute(B);
     const Index nc = static_cast<Index>(R.cols()), nf = static_cast<Index>(W.cols());
@@ -103,10 +103,14 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
         for (Index c = 0; c < nb; ++c)
             for (RowSparse::InnerIterator it(Cd, c0 + c); it; ++it) rows(it.col(), c) += it.value();
         for (Index c = 0; c < nb; ++c) {
+            // As truncate_rows: a node's entries are kept or dropped together.
             const double cut = tau * rows.col(c).cwiseAbs().maxCoeff();
-            for (Index f = 0; f < nf; ++f) {
-                const double v = rows(f, c);
-                if (v != 0.0 && std::abs(v) >= cut) t.emplace_back(c0 + c, f, v);
+            for (Index f0 = 0, f1 = 0; f0 < nf; f0 = f1) {
+                while (f1 < nf && g.fine_dofs[f1] / g.dim == g.fine_dofs[f0] / g.dim) ++f1;
+                const double node_max = rows.col(c).segment(f0, f1 - f0).cwiseAbs().maxCoeff();
+                if (node_max > 0.0 && node_max >= cut)
+                    for (Index f = f0; f < f1; ++f)
+                        if (rows(f, c) != 0.0) t.emplace_back(c0 + c, f, rows(f, c));
             }
         }
     }
@@ -672,14 +676,43 @@ SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dag
     return X;
 }
 
-void truncate_rows(SparseMatrix& M, double tau) {
+void truncate_rows(SparseMatrix& M, double tau, const IndexVector& fine_dofs, int dim) {
+    CG_VERIFY(fine_dofs.size() == M.cols(), "mra: truncation of {} columns with {} DOFs", M.cols(),
+              fine_dofs.size());
     if (tau <= 0) return;
+    M.makeCompressed();
     Vector row_max = Vector::Zero(M.rows());
     for (Index j = 0; j < M.outerSize(); ++j)
         for (SparseMatrix::InnerIterator it(M, j); it; ++it)
             row_max[it.row()] = std::max(row_max[it.row()], std::abs(it.value()));
-    M.prune([&](Index i, Index, double v) { return std::abs(v) >= tau * row_max[i]; });
-    M.makeCompressed();
+    // Per node (a run of columns), the largest |M_ij| of each row there; kept entries (but exact
+    // zeros) are moved down in place.
+    Index* outer = M.outerIndexPtr();
+    Index* inner = M.innerIndexPtr();
+    double* value = M.valuePtr();
+    Vector node_max = Vector::Zero(M.rows());
+    std::vector<Index> touched;
+    Index kept = 0;
+    for (Index j0 = 0, j1 = 0; j0 < M.cols(); j0 = j1) {
+        while (j1 < M.cols() && fine_dofs[j1] / dim == fine_dofs[j0] / dim) ++j1;
+        touched.clear();
+        for (Index p = outer[j0]; p < outer[j1]; ++p) {
+            if (node_max[inner[p]] == 0.0) touched.push_back(inner[p]);
+            node_max[inner[p]] = std::max(node_max[inner[p]], std::abs(value[p]));
+        }
+        for (Index j = j0; j < j1; ++j) {
+            const Index begin = outer[j];
+            outer[j] = kept;
+            for (Index p = begin; p < outer[j + 1]; ++p)
+                if (value[p] != 0.0 && node_max[inner[p]] >= tau * row_max[inner[p]]) {
+                    inner[kept] = inner[p];
+                    value[kept++] = value[p];
+                }
+        }
+        for (const Index i : touched) node_max[i] = 0.0;
+    }
+    outer[M.cols()] = kept;
+    M.data().resize(kept);
 }
 
 namespace {

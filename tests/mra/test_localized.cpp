@@ -188,7 +188,7 @@ TEST_P(MraLocalized, InvarianceCorrectionReproducesRigidMotionsAwayFromDirichlet
     }
 }
 
-TEST_P(MraLocalized, TruncationDropsSmallEntriesOnly) {
+TEST_P(MraLocalized, TruncationDropsSmallNodeEntriesTogether) {
     const bool two_d = dim() == 2;
     const Eigen::Vector3i cells = two_d ? Eigen::Vector3i(16, 16, 1) : Eigen::Vector3i(4, 8, 4);
     const Eigen::Vector3d size = two_d ? Eigen::Vector3d(1, 1, 1) : Eigen::Vector3d(1, 2, 1);
@@ -205,17 +205,40 @@ TEST_P(MraLocalized, TruncationDropsSmallEntriesOnly) {
         const Level& L = h.level(1);
         const Level& L0 = h0.level(1);
         EXPECT_LT(L.C_adapted.nonZeros(), L0.C_adapted.nonZeros()) << "radius " << radius;
-        // Kept entries are at least tau times their row's largest; dropped ones were below it.
-        const Matrix C = Matrix(L.C_adapted.sparse()), C0 = Matrix(L0.C_adapted.sparse());
-        for (Index i = 0; i < C.rows(); ++i) {
-            const double m = C0.row(i).cwiseAbs().maxCoeff();
-            for (Index j = 0; j < C.cols(); ++j) {
-                if (C(i, j) != 0.0)
-                    EXPECT_EQ(C(i, j), C0(i, j));
-                else
-                    EXPECT_LT(std::abs(C0(i, j)), 1e-3 * m);
+        // The entries of a row at a fine node (its columns: consecutive present DOFs) are kept,
+        // unchanged, when the largest of them is at least tau times the row's largest, and
+        // dropped together otherwise: the columns of a node that shared one pattern still do.
+        const SparseMatrix Cs = L.C_adapted.sparse(), C0s = L0.C_adapted.sparse();
+        const Matrix C = Matrix(Cs), C0 = Matrix(C0s);
+        const auto same_pattern = [](const SparseMatrix& M, Index a, Index b) {
+            if (M.col(a).nonZeros() != M.col(b).nonZeros()) return false;
+            for (SparseMatrix::InnerIterator x(M, a), y(M, b); x; ++x, ++y)
+                if (x.row() != y.row()) return false;
+            return true;
+        };
+        const IndexVector& dofs = h.fine_dofs;
+        Index dropped = 0, shared = 0, pairs = 0;
+        for (Index j0 = 0, j1 = 0; j0 < C.cols(); j0 = j1) {
+            while (j1 < C.cols() && dofs[j1] / dim() == dofs[j0] / dim()) ++j1;
+            for (Index i = 0; i < C.rows(); ++i) {
+                const double m = C0.row(i).cwiseAbs().maxCoeff();
+                const auto kept = C.row(i).segment(j0, j1 - j0);
+                const auto full = C0.row(i).segment(j0, j1 - j0);
+                if (full.cwiseAbs().maxCoeff() >= 1e-3 * m) {
+                    EXPECT_TRUE((kept.array() == full.array()).all()) << "row " << i;
+                } else {
+                    EXPECT_EQ(kept.cwiseAbs().maxCoeff(), 0.0) << "row " << i;
+                    dropped += full.cwiseAbs().maxCoeff() > 0.0;
+                }
             }
+            for (Index j = j0 + 1; j < j1; ++j, ++pairs)
+                if (same_pattern(C0s, j0, j)) {
+                    EXPECT_TRUE(same_pattern(Cs, j0, j)) << "columns " << j0 << ", " << j;
+                    ++shared;
+                }
         }
+        EXPECT_GT(shared, pairs / 2) << "radius " << radius;
+        EXPECT_GT(dropped, 0) << "radius " << radius;
         // A^1 is not truncated: it is the Galerkin matrix of the truncated basis, C̃ A^2 C̃^T
         // (round-off of the sparse products, 1e-12 relative).
         const SparseMatrix Ct = L.C_adapted.sparse();

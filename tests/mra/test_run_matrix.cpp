@@ -115,8 +115,10 @@ TEST(RunMatrix, BytesCountValuesRunsAndGroups) {
 
 TEST(RunMatrix, KeepsALocalizedAdaptedRefinementInUnderNineBytesPerEntry) {
     // C̃^1 of a 3D hierarchy at rho = 3 fine rings: a group is a fine node's 3 columns (split
-    // where the truncation or the fixed face gives them different patterns), a run the coarse
-    // DOFs of the nodes along x whose regions hold it. CSC takes 12 bytes per entry.
+    // where the fixed face gives them different patterns; the truncation drops a row's entries
+    // at a node together), a run the coarse DOFs of the nodes along x whose regions hold it.
+    // CSC takes 12 bytes per entry. Measured 8.263, and 8.495 while the truncation dropped
+    // entries one by one (splitting groups).
     const Eigen::Vector3i cells(16, 8, 8);
     const test::GridProblem p = test::hung_problem(3, cells, 1.0, 1e3, test::checker_pattern,
                                                    cells.cast<double>() / cells[1]);
@@ -127,7 +129,7 @@ TEST(RunMatrix, KeepsALocalizedAdaptedRefinementInUnderNineBytesPerEntry) {
     const RunMatrix& C = h.level(1).C_adapted;
     const double per_entry = static_cast<double>(C.bytes()) / C.nonZeros();
     std::printf("C: %d entries, %.3f bytes per entry\n", C.nonZeros(), per_entry);
-    EXPECT_LT(per_entry, 8.5);
+    EXPECT_LT(per_entry, 8.35);
 }
 
 }  // namespace
