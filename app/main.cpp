@@ -9,6 +9,7 @@
 #include <exception>
 
 #include "coarsegrain/coarsen/runtime.hpp"
+#include "coarsegrain/common/allocator.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/progress.hpp"
 #include "run_coarsen.hpp"
@@ -55,6 +56,7 @@ std::vector<std::string> selected_methods(const cg::scene::Scene& scene, const s
 }  // namespace
 
 int main(int argc, char** argv) {
+    coarsegrain::retain_freed_memory();
     CLI::App app{
         "coarsegrain: numerical coarsening of heterogeneous linear-elastic materials.\n"
         "Every command writes DIR/summary.json and DIR/*.vtu (open them in ParaView)."};

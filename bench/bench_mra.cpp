@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "coarsegrain/common/allocator.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/mra/multilevel_solver.hpp"
 #include "coarsegrain/scene/scene.hpp"
@@ -191,6 +192,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    cg::retain_freed_memory();
     try {
         return run(argc, argv);
     } catch (const std::exception& e) {
