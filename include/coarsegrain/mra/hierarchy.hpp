@@ -83,8 +83,8 @@
 /// | construction                 | square err | layered err | density     | defect      |
 /// |------------------------------|------------|-------------|-------------|-------------|
 /// | global, tau = 0              | 0.0116     | 0.0349      | 1.00        | 0           |
-/// | global, tau = 1e-7 (default) | 0.0116     | 0.0349      | 0.61 / 0.33 | 6e-7 / 5e-7 |
-/// | global, tau = 1e-4           | 0.34       | 0.21        | 0.23 / 0.10 | 4e-4 / 2e-4 |
+/// | global, tau = 1e-7 (default) | 0.0116     | 0.0349      | 0.65 / 0.37 | 4e-7 / 3e-7 |
+/// | global, tau = 1e-4           | 0.26       | 0.20        | 0.26 / 0.11 | 3e-4 / 2e-4 |
 /// | rho = 2c (= 4f), corrected   | 0.98       | 0.998       | 0.11        | 0.02        |
 /// | rho = 4c, corrected          | 0.78       | 0.996       | 0.26        | 1e-3 / 2e-3 |
 /// | rho = 4c, no correction      | 0.85       | 0.055       | 0.26        | 1e-3 / 2e-3 |
@@ -103,11 +103,13 @@
 /// stiff strain energy. Rings: with the linear refinement, an odd radius on the fine grid
 /// selects the same wavelets as the even radius below it; the coarse count is twice the fine
 /// count. Hence the defaults: global solves (one CHOLMOD factorization of B^k per step)
-/// followed by truncation at 1e-7, which leaves the error unchanged and C̃ 40-85% sparser
-/// (0.25 / 0.15 dense on 64x64). A^k is not truncated (see Options::truncation). The price is
-/// paid in 3D: on a 24x12x12 hex grid C̃ stays 63% dense and A^1 dense (bench/bench_mra), so
-/// localized radii (with per-step values, e.g. global for the coarse steps) remain the option
-/// for large 3D models, at a much larger error.
+/// followed by truncation at 1e-7, which leaves the error unchanged and C̃ 35-63% sparser
+/// (0.25 / 0.15 dense on 64x64, measured when the truncation still dropped entries one by one;
+/// the two global rows above are by nodes, session 18: by entries they read 0.61 / 0.33 and
+/// 0.34 / 0.21 error at 0.23 / 0.10 density for tau = 1e-4). A^k is not truncated (see
+/// Options::truncation). The price is paid in 3D: on a 24x12x12 hex grid C̃ stays 63% dense and A^1
+/// dense (bench/bench_mra), so localized radii (with per-step values, e.g. global for the coarse
+/// steps) remain the option for large 3D models, at a much larger error.
 ///
 /// ## Cell-wise localization (Options::localization)
 /// Localization::Cell splits R by coarse cells, as the element correctors of Localized
@@ -268,6 +270,10 @@
 /// together) by AMD or METIS, whichever fills less (solve::fill_reducing_order), instead of
 /// AMD on the scalar graph: an interior Dirac region (3,345 unknowns) needs 1.1e8 flops
 /// instead of 1.9e8, and ordering the node graph costs about half the scalar METIS.
+/// (i) session 18: the truncation drops a row's d entries at a finer node together
+/// (Options::truncation), so that a node's columns of C̃ keep one pattern, and the Galerkin
+/// product takes them at once (detail::congruence); the bench calls retain_freed_memory, whose
+/// retained heap the peak now includes.
 ///
 /// | patch | row | build s | solves s | A^1 s | storage MB | peak MB | coarsest error |
 /// |-------|-----|---------|----------|-------|------------|---------|----------------|
@@ -286,12 +292,16 @@
 /// | 2     | (g) | 17.3    | 9.1      | 5.9   | 470        | 1450    | 0.48           |
 /// | 1     | (h) | 22.8    | 17.6     | 3.7   | 363        | 1129    | 0.58           |
 /// | 2     | (h) | 14.1    | 7.0      | 4.9   | 470        | 1446    | 0.48           |
+/// | 1     | (i) | 20.3    | 17.2     | 2.2   | 358        | 1267    | 0.58           |
+/// | 2     | (i) | 10.2    | 6.2      | 3.1   | 463        | 1489    | 0.49           |
 ///
 /// The Dirac refinement in the same setting (its B^1 is 99.86% sparse, the shark's figure in
 /// Table 1): (h) patch 1 build 13.4 s (solves 10.2 s, 14.7-15.9 s with the scalar AMD order of (g);
 /// A^1 2.1 s), storage 239 MB, peak 820 MB, coarsest error 0.79; patch 2 10.0 s (solves 5.1 s,
-/// A^1 3.2 s), 361 MB, peak 1151 MB, error 0.76. Both meet the 15 s and 390 MB; the
-/// linear refinement meets one or the other (patch 2 / patch 1). Global solves with the Dirac
+/// A^1 3.2 s), 361 MB, peak 1151 MB, error 0.76. (i) patch 1 11.5 s (solves 9.7 s, A^1 1.4 s),
+/// 234.5 MB, peak 900 MB, error 0.79; patch 2 6.1 s (solves 3.6 s, A^1 1.8 s), 354.5 MB, peak
+/// 1214 MB, error 0.76. Both meet the 15 s and 390 MB; the linear refinement meets one
+/// or the other (patch 2 / patch 1). Global solves with the Dirac
 /// refinement: build 108 s (solves 43 s, A^1 63 s), 1.47 GB, coarsest error 0.596; so rho = 5
 /// costs the Dirac construction 1.32x its global error here (patch 2: 1.27x), against 3.4x for
 /// the linear one (0.58 against 0.17), whose global construction is 3.5x more accurate.
@@ -342,9 +352,17 @@
 /// 60.6 s, invariance 16.5 s); after the invariance correction lost its per-entry heap
 /// allocations (session 17), 305.6 s (solves 237.6 s, A^1 52.6 s, invariance 5.1 s); before
 /// that, with glibc's malloc thresholds raised (GLIBC_TUNABLES mmap_threshold and
-/// trim_threshold; the library sets neither) 302.3 s, B 1.7 s instead of 4.0-4.6 s. From 32^3
+/// trim_threshold, now retain_freed_memory) 302.3 s, B 1.7 s instead of 4.0-4.6 s. In (i):
+/// 279.5 s (solves 231.8 s, A^1 34.5 s, invariance 4.2 s, B 2.5 s), 4.89 GB (C̃ 3.26e8 entries,
+/// 6% more than truncated by entries, in less storage), build peak 15.2 GB: under the issue's
+/// 300 s and 8 GB. Build-only runs in one session (the bench without its fine reference, a
+/// local variant): before (i) 315.2 s, and 301.8 s with retain_freed_memory's settings (through
+/// GLIBC_TUNABLES); with the rest of (i) 299.0 s, and 277.2 s with them. Patch 2 (in (h)): 252.5
+/// s (solves 138.0 s, A^1 92.4 s), but 8.29 GB of storage and a build peak of 23.3 GB. From 32^3
 /// to 64^3 (7.6x the nodes) the build grows 8.8-11.8x: a region's factorization and solve take
-/// 9-15 ms per thread, longer on the larger grids. The
+/// 9-15 ms per thread, longer on the larger grids. The series in (i): 24^3 11.0 s (solves 9.3 s,
+/// A^1 1.2 s), 207 MB, 0.75; 40x20x20 11.5 s, 235 MB, 0.79; 32^3 26.9 s (22.7, 3.0), 536 MB,
+/// 0.70; 48^3 106.5 s (87.3, 13.5), 1.97 GB, 0.63; 64^3 279.5 s (231.8, 34.5), 4.89 GB. The
 /// 64^3 coarsest operator (104,544 DOFs) would need an 18.6 GB factor, which the memory guard
 /// refused next to the hierarchy (13.8 GB available); bench_mra now runs its fine reference
 /// (factorize 315 s + solve 5.2 s at 64^3) before the build and frees it.
@@ -461,7 +479,7 @@ struct Options {
     /// the exact Galerkin matrix of the truncated basis and is not truncated itself: dropping its
     /// small entries perturbs its near-null space (measured on the 32x32 hung square after global
     /// solves: tau = 1e-7 on A^k raised the coarsest error by 6%, tau = 1e-4 made A^1 indefinite).
-    /// Default 1e-7: C̃ of global solves 40-70% sparser at an unchanged error (see the table above).
+    /// Default 1e-7: C̃ of global solves 35-63% sparser at an unchanged error (see the table above).
     double truncation = 1e-7;
     /// Translation and rotation invariance correction of C̃ (Sec. 3.5), applied after truncation
     /// so that it holds exactly.
