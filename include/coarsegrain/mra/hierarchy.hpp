@@ -354,28 +354,31 @@
 /// that, with glibc's malloc thresholds raised (GLIBC_TUNABLES mmap_threshold and
 /// trim_threshold, now retain_freed_memory) 302.3 s, B 1.7 s instead of 4.0-4.6 s. In (i):
 /// 279.5 s (solves 231.8 s, A^1 34.5 s, invariance 4.2 s, B 2.5 s), 4.89 GB (C̃ 3.26e8 entries,
-/// 6% more than truncated by entries, in less storage), build peak 15.2 GB: under the issue's
-/// 300 s and 8 GB. Build-only runs in one session (the bench without its fine reference, a
-/// local variant): before (i) 315.2 s, and 301.8 s with retain_freed_memory's settings (through
-/// GLIBC_TUNABLES); with the rest of (i) 299.0 s, and 277.2 s with them. Patch 2 (in (h)): 252.5
-/// s (solves 138.0 s, A^1 92.4 s), but 8.29 GB of storage and a build peak of 23.3 GB. From 32^3
-/// to 64^3 (7.6x the nodes) the build grows 8.8-11.8x: a region's factorization and solve take
-/// 9-15 ms per thread, longer on the larger grids. The series in (i): 24^3 11.0 s (solves 9.3 s,
-/// A^1 1.2 s), 207 MB, 0.75; 40x20x20 11.5 s, 235 MB, 0.79; 32^3 26.9 s (22.7, 3.0), 536 MB,
-/// 0.70; 48^3 106.5 s (87.3, 13.5), 1.97 GB, 0.63; 64^3 279.5 s (231.8, 34.5), 4.89 GB. The
-/// 64^3 coarsest operator (104,544 DOFs) would need an 18.6 GB factor, which the memory guard
-/// refused next to the hierarchy (13.8 GB available); bench_mra now runs its fine reference
-/// (factorize 315 s + solve 5.2 s at 64^3) before the build and frees it.
-/// The regions' order: METIS on the scalar graph took the solves of (d) at 40x20x20 from 22.0
-/// to 20.7 s but those of 24^3, rho = 2 from 2.9 to 3.9 s (its ordering time); on the node
-/// graph (h) ordering costs about half (40x20x20: 0.95 against 1.69 CPU-s with Dirac, 1.58
-/// against 4.17 with linear refinement), and 24^3, rho = 2 went from 3.0-3.4 s to 2.6-2.9 s.
+/// 6% more than truncated by entries, in less storage), build peak 15.2 GB; the same run again
+/// (idle machine) 307.0 s (solves 245.7 s, A^1 46.0 s), its fine factorization 186 s against
+/// 200 s: the 300 s is met on average (293 s), not in every run. Build-only runs in one
+/// session (the bench without its fine reference, a local variant): before (i) 315.2 s, and 301.8 s
+/// with retain_freed_memory's settings (through GLIBC_TUNABLES); with the rest of (i) 299.0 s, and
+/// 277.2 s with them. Patch 2 (in (h)): 252.5 s (solves 138.0 s, A^1 92.4 s), but 8.29 GB of
+/// storage and a build peak of 23.3 GB. From 32^3 to 64^3 (7.6x the nodes) the build
+/// grows 8.8-11.8x: a region's factorization and solve take 9-15 ms per thread, longer on the
+/// larger grids. The series in (i): 24^3 11.0 s (solves 9.3 s, A^1 1.2 s), 207 MB, 0.75;
+/// 40x20x20 11.5 s, 235 MB, 0.79; 32^3 26.9 s (22.7, 3.0), 536 MB, 0.70; 48^3 106.5 s
+/// (87.3, 13.5), 1.97 GB, 0.63; 64^3 279.5-307.0 s (231.8-245.7, 34.5-46.0), 4.89 GB. The 64^3
+/// coarsest operator (104,544 DOFs) would need an 18.6 GB factor, which the memory guard refused
+/// next to the hierarchy (13.8 GB available); bench_mra now runs its fine reference (factorize 315
+/// s + solve 5.2 s at 64^3) before the build and frees it. The regions' order: METIS on the scalar
+/// graph took the solves of (d) at 40x20x20 from 22.0 to 20.7 s but those of 24^3, rho = 2 from 2.9
+/// to 3.9 s (its ordering time); on the node graph (h) ordering costs about half (40x20x20: 0.95
+/// against 1.69 CPU-s with Dirac, 1.58 against 4.17 with linear refinement), and 24^3, rho = 2 went
+/// from 3.0-3.4 s to 2.6-2.9 s.
+///
 /// Where the time goes at patch 1 (perf, (d)): the 2,541 local CHOLMOD factorizations (~3,500
-/// unknowns, 2e8 flops each) are mostly BLAS (dgemm and its copies: ~35% of the build's CPU
-/// time); CHOLMOD's permuted transposes of the input, 25% of the solves in (c), are gone, and
-/// ~21% of the regions (the clipped ones at the boundary) have a new pattern and pay an
-/// order and a symbolic analysis. The Galerkin product A^1 takes ~11%, building B[S, S] 3%. A^1
-/// is 36% dense: its factorization (2.7 s) is slower than the fine one (1.6 s) at this radius.
+/// unknowns, 2e8 flops each) are mostly BLAS (dgemm and its copies: ~35% of the build's CPU time);
+/// CHOLMOD's permuted transposes of the input, 25% of the solves in (c), are gone, and ~21% of the
+/// regions (the clipped ones at the boundary) have a new pattern and pay an order and a symbolic
+/// analysis. The Galerkin product A^1 takes ~11%, building B[S, S] 3%. A^1 is 36% dense: its
+/// factorization (2.7 s) is slower than the fine one (1.6 s) at this radius.
 /// Three levels (bench_mra NX NY NZ 3 ...), coarsest factorize + solve against the fine one in
 /// the same run (medians of up to 5 timings each): the paper's beam (32x8x8, 2,673 nodes -> 81,
 /// rho = 5) 148-297x over 12 runs, median about 200x (coarsest 0.29-0.45 ms + 0.04-0.06 ms
@@ -383,7 +386,7 @@
 /// 0.008 s -> 0.003 s + 0.00023 s); 40x20x20 with global solves at the coarse step (1188
 /// coarse DOFs, dense) 105x. Both were 35-50x and 26.5x while the dense coarse operators went
 /// through CHOLMOD (solve::SpdSolver now hands them to LAPACK, on one BLAS thread below 800
-/// unknowns).
+/// unknowns). The beam in (i): 251x, 277x and 312x in three runs.
 #include <limits>
 #include <string>
 #include <vector>
