@@ -4,6 +4,7 @@
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/mra/refinement.hpp"
+#include "coarsegrain/solve/spd_solver.hpp"
 
 namespace coarsegrain::mra::detail {
 
@@ -198,26 +199,17 @@ class RowAccumulator {
 constexpr Index kMaxColumnRun = 3;
 
 /// S's columns in runs of at most kMaxColumnRun consecutive columns with identical row patterns
-/// (a node's DOFs, in an interleaved FEM matrix or in C̃, see truncate_rows): run r is
-/// columns [start[r], start[r + 1]), and column f is in run run_of[f].
+/// (solve::column_groups: a node's DOFs, in an interleaved FEM matrix or in C̃, see
+/// truncate_rows): run r is columns [start[r], start[r + 1]), and column f is in run run_of[f].
 struct ColumnRuns {
     std::vector<Index> start, run_of;
 
-    explicit ColumnRuns(const SparseMatrix& S) {
-        const Index* outer = S.outerIndexPtr();
-        const Index* inner = S.innerIndexPtr();
-        const Index n = static_cast<Index>(S.cols());
-        start.push_back(0);
-        run_of.resize(static_cast<std::size_t>(n));
-        for (Index j = 0; j < n; ++j) {
-            const Index s = start.back();
-            if (j > s &&
-                (j - s >= kMaxColumnRun || outer[j + 1] - outer[j] != outer[s + 1] - outer[s] ||
-                 !std::equal(inner + outer[s], inner + outer[s + 1], inner + outer[j])))
-                start.push_back(j);
-            run_of[static_cast<std::size_t>(j)] = static_cast<Index>(start.size()) - 1;
-        }
-        start.push_back(n);
+    explicit ColumnRuns(const SparseMatrix& S)
+        : start(solve::column_groups(S, kMaxColumnRun)),
+          run_of(static_cast<std::size_t>(S.cols())) {
+        for (std::size_t r = 0; r + 1 < start.size(); ++r)
+            std::fill(run_of.begin() + start[r], run_of.begin() + start[r + 1],
+                      static_cast<Index>(r));
     }
 };
 

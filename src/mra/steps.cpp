@@ -85,6 +85,14 @@ struct RegionScratch {
     std::vector<LocalOrder> orders;
 };
 
+/// One past the last position from j on of `dofs` (grid DOF indices, sorted) on the node of
+/// dofs[j]: the columns of C̃ at one level-(k+1) node are [j, node_end(dofs, dim, j)).
+Index node_end(const IndexVector& dofs, int dim, Index j) {
+    const Index node = dofs[j] / dim;
+    while (j < dofs.size() && dofs[j] / dim == node) ++j;
+    return j;
+}
+
 }  // namespace
 
 SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix& R,
@@ -106,7 +114,7 @@ SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix
             // As truncate_rows: a node's entries are kept or dropped together.
             const double cut = tau * rows.col(c).cwiseAbs().maxCoeff();
             for (Index f0 = 0, f1 = 0; f0 < nf; f0 = f1) {
-                while (f1 < nf && g.fine_dofs[f1] / g.dim == g.fine_dofs[f0] / g.dim) ++f1;
+                f1 = node_end(g.fine_dofs, g.dim, f0);
                 const double node_max = rows.col(c).segment(f0, f1 - f0).cwiseAbs().maxCoeff();
                 if (node_max > 0.0 && node_max >= cut)
                     for (Index f = f0; f < f1; ++f)
@@ -694,7 +702,7 @@ void truncate_rows(SparseMatrix& M, double tau, const IndexVector& fine_dofs, in
     std::vector<Index> touched;
     Index kept = 0;
     for (Index j0 = 0, j1 = 0; j0 < M.cols(); j0 = j1) {
-        while (j1 < M.cols() && fine_dofs[j1] / dim == fine_dofs[j0] / dim) ++j1;
+        j1 = node_end(fine_dofs, dim, j0);
         touched.clear();
         for (Index p = outer[j0]; p < outer[j1]; ++p) {
             if (node_max[inner[p]] == 0.0) touched.push_back(inner[p]);

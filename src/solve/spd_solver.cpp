@@ -166,24 +166,6 @@ std::string ordering_name(int ordering) {
     }
 }
 
-/// Offsets of A's column groups (size #groups + 1): maximal runs of at most `max_size`
-/// consecutive columns with identical row patterns. In an interleaved FEM matrix these are the
-/// nodes (a node with components eliminated by Dirichlet conditions gives a shorter run).
-std::vector<Index> column_groups(const SparseMatrix& A, int max_size) {
-    const int* outer = A.outerIndexPtr();
-    const int* inner = A.innerIndexPtr();
-    const auto same_pattern = [&](Index a, Index b) {
-        return outer[a + 1] - outer[a] == outer[b + 1] - outer[b] &&
-               std::equal(inner + outer[a], inner + outer[a + 1], inner + outer[b]);
-    };
-    std::vector<Index> start{0};
-    const Index n = static_cast<Index>(A.cols());
-    for (Index j = 1; j < n; ++j)
-        if (j - start.back() >= max_size || !same_pattern(start.back(), j)) start.push_back(j);
-    start.push_back(n);
-    return start;
-}
-
 /// Fill-reducing order of a symmetric pattern (n columns, CSC arrays p and i, lower triangle
 /// read) from CHOLMOD's analysis for the ordering only (simplicial, postordered): each of
 /// `methods` (CHOLMOD_AMD, ...) is tried and the one with the smaller factor kept. Returns the
@@ -421,6 +403,21 @@ void check_dense_values(const Matrix& D, const std::string& where) {
 }
 
 }  // namespace
+
+std::vector<Index> column_groups(const SparseMatrix& A, int max_size) {
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const auto same_pattern = [&](Index a, Index b) {
+        return outer[a + 1] - outer[a] == outer[b + 1] - outer[b] &&
+               std::equal(inner + outer[a], inner + outer[a + 1], inner + outer[b]);
+    };
+    std::vector<Index> start{0};
+    const Index n = static_cast<Index>(A.cols());
+    for (Index j = 1; j < n; ++j)
+        if (j - start.back() >= max_size || !same_pattern(start.back(), j)) start.push_back(j);
+    start.push_back(n);
+    return start;
+}
 
 Index DenseCholesky::compute(Matrix A) {
     CG_VERIFY(A.rows() == A.cols(), "dense Cholesky: the matrix is {} by {}, it must be square",

@@ -2,6 +2,7 @@
 /// @file Sparse symmetric positive-definite solver facade.
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "coarsegrain/common/types.hpp"
 
@@ -91,6 +92,11 @@ class DenseCholesky {
     Matrix m_factor;
     bool m_ok = false;
 };
+
+/// Offsets of A's column groups (size #groups + 1; A compressed): maximal runs of at most
+/// `max_size` consecutive columns with identical row patterns. In an interleaved FEM matrix these
+/// are the nodes (a node with components eliminated by Dirichlet conditions gives a shorter run).
+std::vector<Index> column_groups(const SparseMatrix& A, int max_size);
 
 /// Fill-reducing order of the pattern of a symmetric A (both triangles stored, rows sorted), for
 /// SolverOptions::keep_order: CHOLMOD's AMD and METIS, whichever gives the smaller factor
