@@ -217,6 +217,10 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
         o.patch = v->integer();
         v->fail_unless(o.patch >= 1, "expected an integer >= 1, got {}", o.patch);
     }
+    if (auto v = r.find("patch_clip")) {
+        v->fail_unless(v->json().is_boolean(), "expected true or false, got {}", v->json().dump());
+        o.patch_clip = v->json().get<bool>();
+    }
     if (auto v = r.find("truncation")) {
         o.truncation = v->number();
         v->fail_unless(o.truncation >= 0 && o.truncation < 1, "expected a number in [0, 1), got {}",
@@ -297,6 +301,7 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
                            {"invariance", o.invariance},
                            {"dirichlet", dirichlet_name(o.dirichlet)}};
     m.report["options"]["patch"] = o.patch;
+    m.report["options"]["patch_clip"] = o.patch_clip;
     m.report["options"]["localization"] = localization_name(o.localization);
     m.report["options"]["measurement"] = measurement_name(o.measurement);
     m.report["options"]["defect_tolerance"] = o.defect_tolerance;

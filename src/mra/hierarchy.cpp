@@ -367,8 +367,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             lr.start = rings;
             lr.max = std::max(rings, to_rings(options.max_radius));
             lr.defect_tolerance = options.defect_tolerance;
-            detail::LocalizedRefinement lz =
-                detail::localized_refinement(L.B, R, L.C_dagger, L.W, g, lr, options.patch);
+            detail::LocalizedRefinement lz = detail::localized_refinement(
+                L.B, R, L.C_dagger, L.W, g, lr, options.patch, options.patch_clip);
             Ct = std::move(lz.Ct);
             L.region_rings = std::move(lz.rings);
         }
@@ -436,7 +436,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             const int reach = std::isinf(L.radius) ? nf.maxCoeff()
                               : by_cell
                                   ? rings + 2 + basis_reach(h, Phi_present, k + 1) + 2 * linear
-                                  : max_region_rings + 2 * (options.patch - 1) + linear;
+                                  : max_region_rings +
+                                        (options.patch_clip ? 0 : 2 * (options.patch - 1)) + linear;
             for (Index i = 0; i < coarse_nodes; ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)

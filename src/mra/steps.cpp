@@ -78,6 +78,7 @@ struct RegionScratch {
           work(static_cast<std::size_t>(wavelets), 0.0) {}
     std::vector<Index> local;
     std::vector<Index> S;
+    std::vector<Index> own;  ///< clip_to_nodes' wavelets of one node
     SparseMatrix b;
     std::vector<double> work;
     std::vector<Index> fine_position;  ///< adapted_rows' positions, sized on first use
@@ -369,6 +370,31 @@ double orthogonality_defect(const SparseMatrix& B, const SparseMatrix& R, const 
     return worst;
 }
 
+/// Patch clipping (Options::patch_clip): zeroes the entries of x, the region's solution on its
+/// wavelets S, at the wavelets outside each member node's own region (the level-(k+1) nodes
+/// within `rings` of it), so that every node's row of C̃ has the support of patch 1. Member m
+/// owns first[m+1] - first[m] consecutive columns of x, members in order; scratch.local (-1
+/// everywhere) is used and left so.
+void clip_to_nodes(const Region& region, const std::vector<Index>& nodes,
+                   const std::vector<Index>& first, int rings, const SparseMatrix& W,
+                   const std::vector<Index>& fine_local, const StepGeometry& g,
+                   const std::vector<Index>& S, RegionScratch& scratch, Matrix& x) {
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
+    Index q = 0;
+    for (const Index m : region.members) {
+        const std::size_t mm = static_cast<std::size_t>(m);
+        const Eigen::Vector3i c = 2 * node_coordinates(nodes[mm], g.coarse_cells, g.dim);
+        box_wavelets(W, fine_local, nf, g.dim, (c.array() - rings).max(0),
+                     (c.array() + rings).min(nf.array() - 1), scratch.local, scratch.own);
+        const Index count = first[mm + 1] - first[mm];
+        for (std::size_t s = 0; s < S.size(); ++s)
+            if (scratch.local[static_cast<std::size_t>(S[s])] < 0)
+                x.block(static_cast<Index>(s), q, 1, count).setZero();
+        for (const Index w : scratch.own) scratch.local[static_cast<std::size_t>(w)] = -1;
+        q += count;
+    }
+}
+
 /// One region's rows of a matrix: row rows[q] holds x(:, q) at the columns cols.
 struct RegionSolution {
     std::vector<Index> rows;
@@ -481,7 +507,7 @@ void for_each_region(Index count, Index nw, F&& solve) {
 LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatrix& R,
                                          const SparseMatrix& C_dagger, const SparseMatrix& W,
                                          const StepGeometry& g, const LocalizationRings& rings,
-                                         int patch) {
+                                         int patch, bool clip) {
     const int dim = g.dim;
     const Index nw = static_cast<Index>(W.rows());
     const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
@@ -543,6 +569,8 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
         }
         for (const Index m : region.members)
             out.rings[static_cast<std::size_t>(nodes[static_cast<std::size_t>(m)])] = r;
+        if (clip && region.members.size() > 1)
+            clip_to_nodes(region, nodes, first, r, W, fine_local, g, S, scratch, x);
         if (scratch.fine_position.empty())
             scratch.fine_position.assign(static_cast<std::size_t>(num_fine), -1);
         solutions[static_cast<std::size_t>(n)] =

@@ -85,6 +85,7 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.localization, Localization::Node);
     EXPECT_EQ(d.measurement, Measurement::Canonical);
     EXPECT_EQ(d.patch, 1);
+    EXPECT_FALSE(d.patch_clip);
     EXPECT_EQ(d.truncation, 1e-7);
     EXPECT_TRUE(d.invariance);
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
@@ -92,7 +93,7 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.max_radius, 16.0);
     const Options o =
         parse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
-                        "radius_grid": "coarse", "defect_tolerance": 1e-3, "max_radius": 12, "localization": "cell", "measurement": "stiffness", "patch": 2, "truncation": 1e-5,
+                        "radius_grid": "coarse", "defect_tolerance": 1e-3, "max_radius": 12, "localization": "cell", "measurement": "stiffness", "patch": 2, "patch_clip": true, "truncation": 1e-5,
                         "invariance": false, "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
                       "t");
     EXPECT_EQ(o.levels, 4);
@@ -107,6 +108,7 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(o.localization, Localization::Cell);
     EXPECT_EQ(o.measurement, Measurement::Stiffness);
     EXPECT_EQ(o.patch, 2);
+    EXPECT_TRUE(o.patch_clip);
     EXPECT_EQ(o.truncation, 1e-5);
     EXPECT_FALSE(o.invariance);
     EXPECT_EQ(o.dirichlet, DirichletTreatment::DiagonalPenalty);
@@ -130,6 +132,7 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
         {R"({"measurement": "mass"})",
          "coarse.measurement: expected \"canonical\" or \"stiffness\", got \"mass\""},
         {R"({"patch": 0})", "coarse.patch"},
+        {R"({"patch_clip": 1})", "coarse.patch_clip: expected true or false, got 1"},
         {R"({"defect_tolerance": -1e-3})",
          "coarse.defect_tolerance: expected a number >= 0 (0: fixed radius), got -0.001"},
         {R"({"max_radius": 0.5})", "coarse.max_radius: expected a number >= 1, got 0.5"},

@@ -26,6 +26,33 @@ void expect_same_refinements(const Hierarchy& a, const Hierarchy& b, double tol)
     }
 }
 
+/// The wavelets (rows of W, dense) with a nonzero on a fine node of the box [lo, hi] (grid
+/// coordinates of level `fine` of h).
+std::vector<Index> wavelets_touching(const Hierarchy& h, const Matrix& W, int fine,
+                                     const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) {
+    const int d = h.dim;
+    std::vector<Index> S;
+    for (Index w = 0; w < W.rows(); ++w) {
+        bool touches = false;
+        for (Index l = 0; l < W.cols() && !touches; ++l) {
+            if (W(w, l) == 0.0) continue;
+            const Eigen::Vector3i x = node_coordinates(h.fine_dofs[l] / d, h.cells(fine), d);
+            bool inside = true;
+            for (int a = 0; a < d; ++a) inside = inside && x[a] >= lo[a] && x[a] <= hi[a];
+            touches = inside;
+        }
+        if (touches) S.push_back(w);
+    }
+    return S;
+}
+
+/// Z of the finest step of a two-level hierarchy, from C̃ = C^† + Z W as (C̃ - C^†) W^T (W W^T)^{-1}.
+Matrix recovered_z(const Level& L) {
+    const Matrix W = Matrix(L.W);
+    return Matrix(L.C_adapted.sparse() - L.C_dagger) * W.transpose() *
+           (W * W.transpose()).inverse();
+}
+
 class MraLocalized : public ::testing::TestWithParam<LocalizedParam> {
   protected:
     int dim() const { return std::get<0>(GetParam()); }
@@ -367,8 +394,7 @@ TEST_P(MraLocalized, PatchRegionsSolveTheirLocalSystems) {
         const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
         const Level& L = h.level(1);
         const Matrix W = Matrix(L.W);
-        const Matrix Z = Matrix(L.C_adapted.sparse() - L.C_dagger) * W.transpose() *
-                         (W * W.transpose()).inverse();
+        const Matrix Z = recovered_z(L);
         const Matrix R = Matrix(L.W * h.A_fine * SparseMatrix(L.C_dagger.transpose()));
         const Matrix B = Matrix(symmetric_from_lower(L.B));
         const Eigen::Vector3i nf = h.cells(2).array() + 1;
@@ -382,18 +408,7 @@ TEST_P(MraLocalized, PatchRegionsSolveTheirLocalSystems) {
                 lo[a] = std::max(2 * first - 2, 0);
                 hi[a] = std::min(2 * last + 2, nf[a] - 1);
             }
-            std::vector<Index> S;
-            for (Index w = 0; w < W.rows(); ++w) {
-                bool touches = false;
-                for (Index l = 0; l < W.cols(); ++l) {
-                    if (W(w, l) == 0.0) continue;
-                    const Eigen::Vector3i x = node_coordinates(h.fine_dofs[l] / d, h.cells(2), d);
-                    bool inside = true;
-                    for (int a = 0; a < d; ++a) inside = inside && x[a] >= lo[a] && x[a] <= hi[a];
-                    touches = touches || inside;
-                }
-                if (touches) S.push_back(w);
-            }
+            const std::vector<Index> S = wavelets_touching(h, W, 2, lo, hi);
             ASSERT_FALSE(S.empty());
             Vector z = Z.row(r).transpose();
             const double scale = z.cwiseAbs().maxCoeff();
@@ -413,6 +428,52 @@ TEST_P(MraLocalized, PatchRegionsSolveTheirLocalSystems) {
                 << "patch " << patch << " row " << r;
         }
     }
+}
+
+TEST_P(MraLocalized, ClippedPatchesKeepEachNodesOwnWavelets) {
+    // Options::patch_clip: row i of Z is its patch's solution (patch_clip off) on the wavelets
+    // S_i of node i's own rho rings and zero elsewhere, so C̃ has patch 1's pattern. With patch 1
+    // clipping changes nothing (bit for bit).
+    const Eigen::Vector3i cells =
+        dim() == 2 ? Eigen::Vector3i(16, 16, 1) : Eigen::Vector3i(8, 4, 4);
+    const test::GridProblem p = test::hung_problem(dim(), cells, 1.0, 10.0, test::checker_pattern);
+    const int d = dim();
+    Options o = test::exact_options(2, refinement());
+    o.radius = {2};
+    const Hierarchy single = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+    o.patch_clip = true;
+    const Hierarchy single_clipped = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+    EXPECT_EQ(Matrix(single.level(1).C_adapted.sparse()),
+              Matrix(single_clipped.level(1).C_adapted.sparse()));
+    o.patch = 2;
+    const Hierarchy clipped = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+    o.patch_clip = false;
+    const Hierarchy shared = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+    const Level& L = clipped.level(1);
+    const Matrix Zc = recovered_z(L), Zs = recovered_z(shared.level(1));
+    const Matrix W = Matrix(L.W);
+    const Eigen::Vector3i nf = clipped.cells(2).array() + 1;
+    const Matrix Cc = Matrix(L.C_adapted.sparse()), Cd = Matrix(L.C_dagger);
+    Index dropped = 0;
+    for (Index r = 0; r < L.dofs.size(); ++r) {
+        const Eigen::Vector3i c = 2 * node_coordinates(L.dofs[r] / d, L.cells, d);
+        const Eigen::Vector3i lo = (c.array() - 2).max(0), hi = (c.array() + 2).min(nf.array() - 1);
+        Vector expected = Vector::Zero(Zs.cols());
+        // Fine DOFs the row may touch: C^†'s and those of node i's own wavelets (patch 1's).
+        Eigen::Array<bool, Eigen::Dynamic, 1> allowed = Cd.row(r).transpose().array() != 0.0;
+        for (const Index w : wavelets_touching(clipped, W, 2, lo, hi)) {
+            expected[w] = Zs(r, w);
+            allowed = allowed || W.row(w).transpose().array() != 0.0;
+        }
+        dropped += ((Zs.row(r).transpose() - expected).array() != 0.0).count();
+        // Round-off of recovering Z through (W W^T)^{-1}: 1e-10 of the row's largest entry.
+        EXPECT_LT((Zc.row(r).transpose() - expected).cwiseAbs().maxCoeff(),
+                  1e-10 * Zs.row(r).cwiseAbs().maxCoeff())
+            << "row " << r;
+        EXPECT_EQ((Cc.row(r).transpose().array() != 0.0 && !allowed).count(), 0) << "row " << r;
+    }
+    // The patches' regions are wider than the nodes' own: clipping dropped entries.
+    EXPECT_GT(dropped, 0);
 }
 
 TEST_P(MraLocalized, PatchCoveringTheGridEqualsGlobalSolves) {

@@ -199,6 +199,37 @@
 /// amplification described above: a small defect in every basis function adds up over the
 /// smooth, large deformation. Off by default.
 ///
+/// ## Clipped patches (Options::patch_clip)
+/// A patch of 2^dim coarse nodes solves one system on the union of their regions (one
+/// factorization instead of 2^dim), but each node's basis function then spreads over that
+/// union: C̃ and A^k grow. Clipping keeps from the patch's solution only each node's own
+/// wavelets (those of patch 1 at the same rho), so C̃ has patch 1's support, and the kept
+/// coefficients are the patch's, not the minimizers on the smaller support. Measured
+/// (bench_mra 40 20 20 2 5 1e-7 fine R P, Table 1's setting, 2 threads, idle; storage with W and
+/// C^†; coarsest energy error with / without the invariance correction):
+///
+/// | refinement | patch      | build s | solves s | A^1 s | storage MB | error         |
+/// |------------|------------|---------|----------|-------|------------|---------------|
+/// | Dirac      | 1          | 13.1    | 11.0     | 1.5   | 235.5      | 0.790 / 0.704 |
+/// | Dirac      | 2          | 7.1     | 4.2      | 2.2   | 355.5      | 0.762 / -     |
+/// | Dirac      | 2, clipped | 6.1     | 3.9      | 1.6   | 235.5      | 0.790 / 0.702 |
+/// | linear     | 1          | 23.1    | 19.4     | 2.8   | 360.5      | 0.582 / 0.444 |
+/// | linear     | 2          | 12.9    | 7.6      | 4.1   | 465.5      | 0.492 / 0.412 |
+/// | linear     | 2, clipped | 10.8    | 7.1      | 2.8   | 360.6      | 0.708 / 0.500 |
+///
+/// (This session's machine ran patch 1 15% slower than session 18's, 11.5 and 20.3 s.)
+/// With the Dirac refinement clipping costs nothing in accuracy: patch 1's error and storage for
+/// patch 2's factorizations, and A^1 nearly as fast as patch 1's. At 64^3 (bench_mra 64 64 64
+/// 2 5 1e-7 fine dirac 2c): builds of 163.5 s (solves 113.3 s, A^1 36.5 s, invariance 4.3 s, B
+/// 2.2 s; the full bench, after its fine reference's factorize 208.4 s + solve 2.8 s) and 175.7 s
+/// (a build-only variant), 4.90 GB with W and C^† (C̃ 3.26e8 entries, as with patch 1), build
+/// peak 16.0-16.6 GB, against 279.5-307.0 s for patch 1 and 252.5 s / 8.29 GB for patch 2. With the
+/// linear refinement the clipped functions lose more (0.71 against 0.58), but it is the only
+/// setting measured here that builds Table 1's box within both 15 s and 390 MB. A ring more
+/// (clipping at rho + 1) keeps nearly the whole patch region with the linear refinement (460.2 MB,
+/// error 0.49). Note the invariance correction's cost on this 3D checker: it raises the coarsest
+/// error by 12% (Dirac) to 40% (linear clipped).
+///
 /// ## Cost in 3D (bench/bench_mra)
 /// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
 /// clamped at x = 0, gravity), hex grids, 3 levels (coarsest = grid / 4), truncation 1e-7,
@@ -467,6 +498,12 @@ struct Options {
     /// (at least as accurate as patch 1 with the same rho) and divides the number of
     /// factorizations by patch^dim.
     int patch = 1;
+    /// With patch > 1, each node keeps from its patch's solution only the wavelets within its
+    /// own rho rings (zeroes the rest), so its basis function has the support of patch 1: C̃
+    /// and A^k as sparse as with patch 1, for patch^dim fewer factorizations. The clipped rows
+    /// no longer minimize the energy on their support; see "Clipped patches" above for what that
+    /// costs each refinement.
+    bool patch_clip = false;
     /// Node- or cell-wise localization (finite radii only; Cell needs patch 1 and the Eliminate
     /// or Constrain treatment, whose fine operator is the sum of the element matrices).
     Localization localization = Localization::Node;

@@ -54,10 +54,11 @@ struct Scene {
 
 /// Every key the "coarse" block may hold, over all methods.
 inline constexpr std::initializer_list<const char*> kCoarseKeys = {
-    "mesh",        "normals",          "boundary",          "map",           "levels",
-    "refinement",  "radius",           "radius_grid",       "patch",         "truncation",
-    "invariance",  "dirichlet",        "spectrum_max_dofs", "cell_tensors",  "localization",
-    "measurement", "defect_tolerance", "max_radius",        "boundary_blind"};
+    "mesh",        "normals",           "boundary",     "map",
+    "levels",      "refinement",        "radius",       "radius_grid",
+    "patch",       "patch_clip",        "truncation",   "invariance",
+    "dirichlet",   "spectrum_max_dofs", "cell_tensors", "localization",
+    "measurement", "defect_tolerance",  "max_radius",   "boundary_blind"};
 
 /// Reads and validates a scene file; relative file names inside are relative to its folder.
 /// @throws InvalidScene / MeshReadError / Error naming the file and key
