@@ -111,6 +111,19 @@
 /// dense (bench/bench_mra), so localized radii (with per-step values, e.g. global for the coarse
 /// steps) remain the option for large 3D models, at a much larger error.
 ///
+/// Two experiments (session 19, not kept; 2D, node-wise, rho in coarse rings) on what the
+/// correction should reproduce. (1) The global construction's combination of the rigid motions,
+/// Ĉ^T (C r) with Ĉ from one factorization of B^k and 3 solves, applied at every node (none
+/// skipped near the Dirichlet boundary), instead of exact rigid motions: 32x32, 3 levels, rho =
+/// 6c: square 0.133 (the paper's rule 0.161), layered 0.193 (0.997; 0.036 without correction),
+/// across 0.56 (0.93); with the affine fields too (6 modes) 0.110 / 0.178 / 0.246. (2)
+/// Energy-minimizing bases (Xu and Zikatanov; Mandel, Brezina and Vaněk): the localized rows
+/// that minimize the total energy sum_i ||φ_i||_A^2 subject to reproducing (1)'s targets, by
+/// conjugate gradients on the Lagrange multipliers preconditioned with B^k (85-1800 iterations):
+/// 16x16, 2 levels, rho = 4c / 6c: square 0.155 / 0.019 (no correction 0.238 / 0.025, global
+/// 0.0128), layered 0.94 / 0.83 (0.51 / 0.14), across 0.84 / 0.84 (1.00 / 0.96). Neither is
+/// within 1.5x of the global error on all three problems.
+///
 /// ## Cell-wise localization (Options::localization)
 /// Localization::Cell splits R by coarse cells, as the element correctors of Localized
 /// Orthogonal Decomposition, with a left inverse that reproduces rigid motions (the library's
@@ -227,8 +240,13 @@
 /// linear refinement the clipped functions lose more (0.71 against 0.58), but it is the only
 /// setting measured here that builds Table 1's box within both 15 s and 390 MB. A ring more
 /// (clipping at rho + 1) keeps nearly the whole patch region with the linear refinement (460.2 MB,
-/// error 0.49). Note the invariance correction's cost on this 3D checker: it raises the coarsest
-/// error by 12% (Dirac) to 40% (linear clipped).
+/// error 0.49). Other patch sizes, clipped (same session): patch 3 Dirac 5.05 s (error 0.785),
+/// linear 8.0 s (0.708); patch 4 Dirac 9.25 s: beyond 3 the regions' factorizations grow faster
+/// than their number falls. Patch 2 clipped Dirac measured 5.29 s in a second run. Smoothing the
+/// clipped rows by symmetric Gauss-Seidel sweeps on each node's own system (an experiment) took
+/// the linear error from 0.71 to 0.62 (2 sweeps) and 0.59 (10), but 2 sweeps cost as much as the
+/// factorizations they save (solves 6.2 -> 14.6 s). Note the invariance correction's cost on
+/// this 3D checker: it raises the coarsest error by 12% (Dirac) to 40% (linear clipped).
 ///
 /// ## Cost in 3D (bench/bench_mra)
 /// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
