@@ -64,9 +64,9 @@ struct LocalizedRefinement {
 /// uses the block's region, the fine nodes within `rings` of any node of the block: one
 /// factorization of B[S, S] serves all its columns. Whatever the patch, nodes (or blocks) whose
 /// regions coincide after clipping to the grid share one factorization; with patch = 1 this
-/// changes nothing but the cost. With `clip`, each node keeps from its block's solution only
-/// the wavelets of its own region (zeroes the others; see Options::patch_clip), so that its row
-/// of C̃ has the support of patch 1. The regions are processed in parallel (OpenMP), each with its
+/// changes nothing but the cost. With `clip`, each node's rows of C̃ are formed from its block's
+/// solution on the wavelets of its own region only (Options::patch_clip), so that they have the
+/// support of patch 1. The regions are processed in parallel (OpenMP), each with its
 /// own dense (small) or sparse Cholesky factorization; regions of the same shape reuse the
 /// symbolic analysis.
 LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatrix& R,

@@ -78,7 +78,7 @@ struct RegionScratch {
           work(static_cast<std::size_t>(wavelets), 0.0) {}
     std::vector<Index> local;
     std::vector<Index> S;
-    std::vector<Index> own;  ///< clip_to_nodes' wavelets of one node
+    std::vector<Index> own;  ///< clipped_rows' wavelets of one node
     SparseMatrix b;
     std::vector<double> work;
     std::vector<Index> fine_position;  ///< adapted_rows' positions, sized on first use
@@ -370,31 +370,6 @@ double orthogonality_defect(const SparseMatrix& B, const SparseMatrix& R, const 
     return worst;
 }
 
-/// Patch clipping (Options::patch_clip): zeroes the entries of x, the region's solution on its
-/// wavelets S, at the wavelets outside each member node's own region (the level-(k+1) nodes
-/// within `rings` of it), so that every node's row of C̃ has the support of patch 1. Member m
-/// owns first[m+1] - first[m] consecutive columns of x, members in order; scratch.local (-1
-/// everywhere) is used and left so.
-void clip_to_nodes(const Region& region, const std::vector<Index>& nodes,
-                   const std::vector<Index>& first, int rings, const SparseMatrix& W,
-                   const std::vector<Index>& fine_local, const StepGeometry& g,
-                   const std::vector<Index>& S, RegionScratch& scratch, Matrix& x) {
-    const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
-    Index q = 0;
-    for (const Index m : region.members) {
-        const std::size_t mm = static_cast<std::size_t>(m);
-        const Eigen::Vector3i c = 2 * node_coordinates(nodes[mm], g.coarse_cells, g.dim);
-        box_wavelets(W, fine_local, nf, g.dim, (c.array() - rings).max(0),
-                     (c.array() + rings).min(nf.array() - 1), scratch.local, scratch.own);
-        const Index count = first[mm + 1] - first[mm];
-        for (std::size_t s = 0; s < S.size(); ++s)
-            if (scratch.local[static_cast<std::size_t>(S[s])] < 0)
-                x.block(static_cast<Index>(s), q, 1, count).setZero();
-        for (const Index w : scratch.own) scratch.local[static_cast<std::size_t>(w)] = -1;
-        q += count;
-    }
-}
-
 /// One region's rows of a matrix: row rows[q] holds x(:, q) at the columns cols.
 struct RegionSolution {
     std::vector<Index> rows;
@@ -433,6 +408,40 @@ RegionSolution adapted_rows(const Matrix& x, const std::vector<Index>& S, std::v
                 it.value();
     for (const Index f : out.cols) position[static_cast<std::size_t>(f)] = -1;
     return out;
+}
+
+/// Patch clipping (Options::patch_clip): the rows of C̃ of each member node of a region from the
+/// region's solution x on its wavelets S, restricted to the node's own wavelets (those with a
+/// nonzero on a level-(k+1) node within `rings` of it), so that the node's row of C̃ has the
+/// support of patch 1. Member m owns first[m+1] - first[m] consecutive columns of x and rows of
+/// `rows`, members in order; its rows go to solutions[m]. scratch.local (-1 everywhere) is used
+/// and left so.
+void clipped_rows(const Region& region, const std::vector<Index>& first,
+                  const std::vector<Index>& rows, const std::vector<Index>& nodes, int rings,
+                  const SparseMatrix& W, const SparseMatrix& Wt, const RowSparse& Cd,
+                  const std::vector<Index>& fine_local, const StepGeometry& g,
+                  const std::vector<Index>& S, const Matrix& x, RegionScratch& scratch,
+                  std::vector<RegionSolution>& solutions) {
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
+    std::vector<Index>& own = scratch.own;
+    Index q = 0;
+    for (const Index m : region.members) {
+        const std::size_t mm = static_cast<std::size_t>(m);
+        const Eigen::Vector3i c = 2 * node_coordinates(nodes[mm], g.coarse_cells, g.dim);
+        box_wavelets(W, fine_local, nf, g.dim, (c.array() - rings).max(0),
+                     (c.array() + rings).min(nf.array() - 1), scratch.local, own);
+        for (const Index w : own) scratch.local[static_cast<std::size_t>(w)] = -1;
+        const Index count = first[mm + 1] - first[mm];
+        // own is a sorted subset of the sorted S.
+        Matrix xo(static_cast<Index>(own.size()), count);
+        for (std::size_t o = 0, s = 0; o < own.size(); ++o) {
+            while (S[s] != own[o]) ++s;
+            xo.row(static_cast<Index>(o)) = x.block(static_cast<Index>(s), q, 1, count);
+        }
+        solutions[mm] = adapted_rows(xo, own, {rows.begin() + q, rows.begin() + q + count}, Wt, Cd,
+                                     scratch.fine_position);
+        q += count;
+    }
 }
 
 /// A #rows by #cols matrix from region solutions that each own their rows (no row in two
@@ -532,7 +541,9 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
     const Index num_fine = static_cast<Index>(W.cols());
     LocalizedRefinement out;
     out.rings.assign(static_cast<std::size_t>(grid_nodes(g.coarse_cells, dim)), 0);
-    std::vector<RegionSolution> solutions(static_cast<std::size_t>(num_regions));
+    // Per node (an index into `nodes`), the rows of C̃ it holds: a region's rows at its first
+    // member, or each member's own rows when clipped.
+    std::vector<RegionSolution> solutions(nodes.size());
     for_each_region(num_regions, nw, [&](Index n, RegionScratch& scratch) {
         std::vector<Index>& local = scratch.local;
         std::vector<Index>& S = scratch.S;
@@ -569,12 +580,14 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
         }
         for (const Index m : region.members)
             out.rings[static_cast<std::size_t>(nodes[static_cast<std::size_t>(m)])] = r;
-        if (clip && region.members.size() > 1)
-            clip_to_nodes(region, nodes, first, r, W, fine_local, g, S, scratch, x);
         if (scratch.fine_position.empty())
             scratch.fine_position.assign(static_cast<std::size_t>(num_fine), -1);
-        solutions[static_cast<std::size_t>(n)] =
-            adapted_rows(x, S, std::move(rows), Wt, Cd, scratch.fine_position);
+        if (clip && region.members.size() > 1)
+            clipped_rows(region, first, rows, nodes, r, W, Wt, Cd, fine_local, g, S, x, scratch,
+                         solutions);
+        else
+            solutions[static_cast<std::size_t>(region.members.front())] =
+                adapted_rows(x, S, std::move(rows), Wt, Cd, scratch.fine_position);
     });
     out.Ct = from_region_solutions(solutions, static_cast<Index>(g.coarse_dofs.size()), num_fine);
     return out;

@@ -236,7 +236,13 @@
 /// 2 5 1e-7 fine dirac 2c): builds of 163.5 s (solves 113.3 s, A^1 36.5 s, invariance 4.3 s, B
 /// 2.2 s; the full bench, after its fine reference's factorize 208.4 s + solve 2.8 s) and 175.7 s
 /// (a build-only variant), 4.90 GB with W and C^† (C̃ 3.26e8 entries, as with patch 1), build
-/// peak 16.0-16.6 GB, against 279.5-307.0 s for patch 1 and 252.5 s / 8.29 GB for patch 2. With the
+/// peak 16.0-16.6 GB, against 279.5-307.0 s for patch 1 and 252.5 s / 8.29 GB for patch 2. The
+/// linear refinement at 64^3, patch 2 clipped (build only): 253.4 s (solves 147.5 s, A^1 65.3 s,
+/// B 21.2 s, invariance 5.7 s), 7.43 GB (C̃ 4.23e8 entries, A^1's lower triangle 2.61e8),
+/// build peak 22.8 GB, against 516.7 s and 7.41 GB with patch 1 (session 16). Clipping also
+/// keeps the transient rows small: each node's rows are formed on its own wavelets only (a first
+/// version formed them over the patch's and dropped the zeros afterwards, and was killed by the
+/// kernel at 24.4 GB here). With the
 /// linear refinement the clipped functions lose more (0.71 against 0.58), but it is the only
 /// setting measured here that builds Table 1's box within both 15 s and 390 MB. A ring more
 /// (clipping at rho + 1) keeps nearly the whole patch region with the linear refinement (460.2 MB,
