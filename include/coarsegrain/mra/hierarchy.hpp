@@ -225,34 +225,34 @@
 /// |------------|------------|---------|----------|-------|------------|---------------|
 /// | Dirac      | 1          | 13.1    | 11.0     | 1.5   | 235.5      | 0.790 / 0.704 |
 /// | Dirac      | 2          | 7.1     | 4.2      | 2.2   | 355.5      | 0.762 / -     |
-/// | Dirac      | 2, clipped | 6.1     | 3.9      | 1.6   | 235.5      | 0.790 / 0.702 |
+/// | Dirac      | 2, clipped | 5.2-6.1 | 3.4-3.9  | 1.3-1.6 | 235.5    | 0.790 / 0.702 |
 /// | linear     | 1          | 23.1    | 19.4     | 2.8   | 360.5      | 0.582 / 0.444 |
 /// | linear     | 2          | 12.9    | 7.6      | 4.1   | 465.5      | 0.492 / 0.412 |
-/// | linear     | 2, clipped | 10.8    | 7.1      | 2.8   | 360.6      | 0.708 / 0.500 |
+/// | linear     | 2, clipped | 8.8-10.8 | 5.8-7.1 | 2.2-2.8 | 360.6    | 0.708 / 0.500 |
 ///
 /// (This session's machine ran patch 1 15% slower than session 18's, 11.5 and 20.3 s.)
 /// With the Dirac refinement clipping costs nothing in accuracy: patch 1's error and storage for
 /// patch 2's factorizations, and A^1 nearly as fast as patch 1's. At 64^3 (bench_mra 64 64 64
 /// 2 5 1e-7 fine dirac 2c): builds of 163.5 s (solves 113.3 s, A^1 36.5 s, invariance 4.3 s, B
 /// 2.2 s; the full bench, after its fine reference's factorize 208.4 s + solve 2.8 s) and 175.7 s
-/// (a build-only variant), 4.90 GB with W and C^† (C̃ 3.26e8 entries, as with patch 1), build
-/// peak 16.0-16.6 GB, against 279.5-307.0 s for patch 1 and 252.5 s / 8.29 GB for patch 2. The
-/// linear refinement at 64^3, patch 2 clipped (build only): 253.4 s (solves 147.5 s, A^1 65.3 s,
-/// B 21.2 s, invariance 5.7 s), 7.43 GB (C̃ 4.23e8 entries, A^1's lower triangle 2.61e8),
-/// build peak 22.8 GB, against 516.7 s and 7.41 GB with patch 1 (session 16). Clipping also
-/// keeps the transient rows small: each node's rows are formed on its own wavelets only (a first
-/// version formed them over the patch's and dropped the zeros afterwards, and was killed by the
-/// kernel at 24.4 GB here). With the
-/// linear refinement the clipped functions lose more (0.71 against 0.58), but it is the only
-/// setting measured here that builds Table 1's box within both 15 s and 390 MB. A ring more
-/// (clipping at rho + 1) keeps nearly the whole patch region with the linear refinement (460.2 MB,
-/// error 0.49). Other patch sizes, clipped (same session): patch 3 Dirac 5.05 s (error 0.785),
-/// linear 8.0 s (0.708); patch 4 Dirac 9.25 s: beyond 3 the regions' factorizations grow faster
-/// than their number falls. Patch 2 clipped Dirac measured 5.29 s in a second run. Smoothing the
-/// clipped rows by symmetric Gauss-Seidel sweeps on each node's own system (an experiment) took
-/// the linear error from 0.71 to 0.62 (2 sweeps) and 0.59 (10), but 2 sweeps cost as much as the
-/// factorizations they save (solves 6.2 -> 14.6 s). Note the invariance correction's cost on
-/// this 3D checker: it raises the coarsest error by 12% (Dirac) to 40% (linear clipped).
+/// (a build-only variant) with the first version (below), 145.6 s with the committed one (build
+/// only; solves 95.1 s, A^1 35.1 s), 4.90 GB with W and C^† (C̃ 3.26e8 entries, as with patch
+/// 1), build peak 15.7-16.6 GB, against 279.5-307.0 s for patch 1 and 252.5 s / 8.29 GB for
+/// patch 2. The linear refinement at 64^3, patch 2 clipped (build only): 253.4 s (solves 147.5 s,
+/// A^1 65.3 s, B 21.2 s, invariance 5.7 s), 7.43 GB (C̃ 4.23e8 entries, A^1's lower
+/// triangle 2.61e8), build peak 22.8 GB, against 516.7 s and 7.41 GB with patch 1 (session 16).
+/// Clipping also keeps the transient rows small: each node's rows are formed on its own wavelets
+/// only (a first version formed them over the patch's and dropped the zeros afterwards, and was
+/// killed by the kernel at 24.4 GB here). With the linear refinement the clipped functions lose
+/// more (0.71 against 0.58), but it is the only setting measured here that builds Table 1's box
+/// within both 15 s and 390 MB. A ring more (clipping at rho + 1) keeps nearly the whole patch
+/// region with the linear refinement (460.2 MB, error 0.49). Other patch sizes, clipped (same
+/// session): patch 3 Dirac 5.05 s (error 0.785), linear 8.0 s (0.708); patch 4 Dirac 9.25 s: beyond
+/// 3 the regions' factorizations grow faster than their number falls. Smoothing the clipped rows by
+/// symmetric Gauss-Seidel sweeps on each node's own system (an experiment) took the linear error
+/// from 0.71 to 0.62 (2 sweeps) and 0.59 (10), but 2 sweeps cost as much as the factorizations they
+/// save (solves 6.2 -> 14.6 s). Note the invariance correction's cost on this 3D checker: it raises
+/// the coarsest error by 12% (Dirac) to 40% (linear clipped).
 ///
 /// ## Cost in 3D (bench/bench_mra)
 /// The accordion beam of examples/accordion (4x1x1, layers of E 1e5 / 1e2 across the axis,
