@@ -45,6 +45,7 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         EXPECT_EQ(m.bc.dofs.size(), std::string(refinement) == "dirac" ? 6u : 0u);
         EXPECT_EQ(m.report["levels"].size(), 2u);
         EXPECT_EQ(m.report["options"]["dirichlet"], "constrain");
+        EXPECT_EQ(m.report["options"]["patch_clip"], false);
         EXPECT_GT(m.timings["level 1: A"] + m.timings["level 2: A"], 0.0);
 
         // Solving the model as the runtime does (conditions eliminated) gives the hierarchy's
