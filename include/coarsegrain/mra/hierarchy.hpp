@@ -111,7 +111,7 @@
 /// dense (bench/bench_mra), so localized radii (with per-step values, e.g. global for the coarse
 /// steps) remain the option for large 3D models, at a much larger error.
 ///
-/// Two experiments (session 19, not kept; 2D, node-wise, rho in coarse rings) on what the
+/// Three experiments (session 19, not kept; 2D, node-wise, rho in coarse rings) on what the
 /// correction should reproduce. (1) The global construction's combination of the rigid motions,
 /// Ĉ^T (C r) with Ĉ from one factorization of B^k and 3 solves, applied at every node (none
 /// skipped near the Dirichlet boundary), instead of exact rigid motions: 32x32, 3 levels, rho =
