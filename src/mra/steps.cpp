@@ -428,8 +428,8 @@ void clipped_rows(const Region& region, const std::vector<Index>& first,
     for (const Index m : region.members) {
         const std::size_t mm = static_cast<std::size_t>(m);
         const Eigen::Vector3i c = 2 * node_coordinates(nodes[mm], g.coarse_cells, g.dim);
-        box_wavelets(W, fine_local, nf, g.dim, (c.array() - rings).max(0),
-                     (c.array() + rings).min(nf.array() - 1), scratch.local, own);
+        const auto [lo, hi] = Region{c, c, {}}.box(rings, nf);
+        box_wavelets(W, fine_local, nf, g.dim, lo, hi, scratch.local, own);
         for (const Index w : own) scratch.local[static_cast<std::size_t>(w)] = -1;
         const Index count = first[mm + 1] - first[mm];
         // own is a sorted subset of the sorted S.
