@@ -323,17 +323,6 @@ Matrix column_block(const SparseMatrix& M, const IndexVector& cols, IndexVector&
     return block;
 }
 
-/// Appends -x as entries (rows[q], S[s]) of Z.
-void append_solution(const Matrix& x, const std::vector<Index>& rows, const std::vector<Index>& S,
-                     std::vector<Triplet>& part) {
-    part.reserve(part.size() + static_cast<std::size_t>(x.size()));
-    for (Index q = 0; q < x.cols(); ++q)
-        for (Index s = 0; s < x.rows(); ++s)
-            if (x(s, q) != 0.0)
-                part.emplace_back(rows[static_cast<std::size_t>(q)], S[static_cast<std::size_t>(s)],
-                                  -x(s, q));
-}
-
 /// The A-orthogonality defect of Eq. 12 of the rows `rows` of C̃ = C^† + Z W whose Z rows are
 /// -x on the wavelets S (zero elsewhere): row r of C̃ A W^T is R[:, r]^T - x[:, q]^T B[S, :],
 /// zero on S (the local solve) and not outside it. Returns the largest relative defect
@@ -471,21 +460,6 @@ SparseMatrix from_region_solutions(std::vector<RegionSolution>& solutions, Index
         s = RegionSolution();
     }
     return SparseMatrix(M);
-}
-
-/// Z (#rows by #cols) from per-region entries (duplicates summed), freeing them on the way.
-SparseMatrix from_parts(std::vector<std::vector<Triplet>>& parts, Index rows, Index cols) {
-    std::size_t total = 0;
-    for (const auto& p : parts) total += p.size();
-    std::vector<Triplet> t;
-    t.reserve(total);
-    for (auto& p : parts) {
-        t.insert(t.end(), p.begin(), p.end());
-        std::vector<Triplet>().swap(p);
-    }
-    SparseMatrix Z(rows, cols);
-    Z.setFromTriplets(t.begin(), t.end());
-    return Z;
 }
 
 /// Runs solve(n, scratch) for every region n in [0, count) on all OpenMP threads (dynamic
@@ -663,17 +637,112 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
     return parts;
 }
 
+namespace {
+
+/// The region of cell T: the level-(k+1) nodes within `rings` of T (its nodes 2c .. 2c + 2),
+/// as a box [lo, hi] of the grid of nf nodes.
+std::pair<Eigen::Vector3i, Eigen::Vector3i> cell_region(const Eigen::Vector3i& cell, int rings,
+                                                        const Eigen::Vector3i& nf) {
+    return {(2 * cell.array() - rings).max(0), (2 * cell.array() + 2 + rings).min(nf.array() - 1)};
+}
+
+/// Rows of M with a nonzero in the columns `cols`, sorted.
+std::vector<Index> touching_rows(const SparseMatrix& M, const IndexVector& cols) {
+    std::vector<Index> r;
+    for (const Index c : cols)
+        for (SparseMatrix::InnerIterator it(M, c); it; ++it)
+            r.push_back(static_cast<Index>(it.row()));
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    return r;
+}
+
+/// Z = sum_T Z^T, summed in place. Row r's pattern is the wavelets of the bounding box of the
+/// regions of the cells whose C^† Φ reaches r: a superset of the union of their S_T (the regions
+/// of a block of cells overlap), so each cell's solution is added where it falls. Holding the
+/// cells' solutions as triplets instead took ~10 per entry of Z (a peak of 10.8 GB at 16^3 hexes,
+/// rho = 5).
+class CellSum {
+  public:
+    CellSum(const SparseMatrix& W, const SparseMatrix& CdPhi,
+            const std::vector<CellStiffness>& parts, const StepGeometry& g, int rings)
+        : cols_(static_cast<std::size_t>(CdPhi.rows())),
+          values_(cols_.size()),
+          locks_(cols_.size()) {
+        const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
+        std::vector<Eigen::Vector3i> lo(cols_.size(), nf),
+            hi(cols_.size(), Eigen::Vector3i(-1, -1, -1));
+        for (const CellStiffness& part : parts) {
+            const auto [a, b] = cell_region(part.cell, rings, nf);
+            for (const Index r : touching_rows(CdPhi, part.dofs)) {
+                lo[static_cast<std::size_t>(r)] = lo[static_cast<std::size_t>(r)].cwiseMin(a);
+                hi[static_cast<std::size_t>(r)] = hi[static_cast<std::size_t>(r)].cwiseMax(b);
+            }
+        }
+        const std::vector<Index> fine_local = fine_local_index(g);
+        for_each_region(static_cast<Index>(cols_.size()), static_cast<Index>(W.rows()),
+                        [&](Index r, RegionScratch& scratch) {
+                            const auto q = static_cast<std::size_t>(r);
+                            if ((hi[q].array() < lo[q].array()).any()) return;
+                            box_wavelets(W, fine_local, nf, g.dim, lo[q], hi[q], scratch.local,
+                                         cols_[q]);
+                            for (const Index w : cols_[q])
+                                scratch.local[static_cast<std::size_t>(w)] = -1;
+                            values_[q].assign(cols_[q].size(), 0.0);
+                        });
+    }
+
+    /// Z[rows[q], S] -= x[:, q] for every q (S sorted, within each row's pattern).
+    void subtract(const Matrix& x, const IndexVector& rows, const std::vector<Index>& S) {
+        for (Index q = 0; q < rows.size(); ++q) {
+            const auto r = static_cast<std::size_t>(rows[q]);
+            const std::lock_guard<std::mutex> lock(locks_[r]);
+            const std::vector<Index>& cols = cols_[r];
+            std::size_t p = 0;
+            for (std::size_t s = 0; s < S.size(); ++s) {
+                while (p < cols.size() && cols[p] < S[s]) ++p;
+                CG_ASSERT(p < cols.size() && cols[p] == S[s], "mra: wavelet outside its row's box");
+                values_[r][p] -= x(static_cast<Index>(s), q);
+            }
+        }
+    }
+
+    /// The sum, its exact zeros dropped; the accumulator is emptied.
+    SparseMatrix take(Index wavelets) {
+        RowSparse Z(static_cast<Index>(cols_.size()), wavelets);
+        IndexVector sizes(Z.rows());
+        for (std::size_t r = 0; r < cols_.size(); ++r)
+            sizes[static_cast<Index>(r)] = static_cast<Index>(cols_[r].size());
+        Z.reserve(sizes);
+        for (std::size_t r = 0; r < cols_.size(); ++r) {
+            for (std::size_t p = 0; p < cols_[r].size(); ++p)
+                if (values_[r][p] != 0.0)
+                    Z.insert(static_cast<Index>(r), cols_[r][p]) = values_[r][p];
+            std::vector<Index>().swap(cols_[r]);
+            std::vector<double>().swap(values_[r]);
+        }
+        Z.makeCompressed();
+        return SparseMatrix(Z);
+    }
+
+  private:
+    std::vector<std::vector<Index>> cols_;
+    std::vector<std::vector<double>> values_;
+    std::vector<std::mutex> locks_;
+};
+
+}  // namespace
+
 SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                               const SparseMatrix& WPhi, const SparseMatrix& CdPhi,
                               const std::vector<CellStiffness>& parts, const StepGeometry& g,
                               int rings) {
     const int dim = g.dim;
-    const Index nw = static_cast<Index>(W.rows()), nc = static_cast<Index>(CdPhi.rows());
+    const Index nw = static_cast<Index>(W.rows());
     const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
     const std::vector<Index> fine_local = fine_local_index(g);
-    const Index num_parts = static_cast<Index>(parts.size());
-    std::vector<std::vector<Triplet>> out(static_cast<std::size_t>(num_parts));
-    for_each_region(num_parts, nw, [&](Index n, RegionScratch& scratch) {
+    CellSum Z(W, CdPhi, parts, g, rings);
+    for_each_region(static_cast<Index>(parts.size()), nw, [&](Index n, RegionScratch& scratch) {
         std::vector<Index>& local = scratch.local;
         std::vector<Index>& S = scratch.S;
         const CellStiffness& part = parts[static_cast<std::size_t>(n)];
@@ -683,9 +752,7 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
         const Matrix ct = column_block(CdPhi, part.dofs, crows);
         if (wrows.size() == 0 || crows.size() == 0) return;
         const Matrix rt = wt * part.A * ct.transpose();
-        // The region: level-(k+1) nodes within `rings` of T (its nodes 2c .. 2c + 2).
-        const Eigen::Vector3i lo = (2 * part.cell.array() - rings).max(0);
-        const Eigen::Vector3i hi = (2 * part.cell.array() + 2 + rings).min(nf.array() - 1);
+        const auto [lo, hi] = cell_region(part.cell, rings, nf);
         box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
         const Index ns = static_cast<Index>(S.size());
         Matrix rhs = Matrix::Zero(ns, crows.size());
@@ -696,11 +763,9 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
         Matrix x;
         if (ns > 0) x = solve_region(B, S, local, rhs, dim, scratch, 0);
         for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
-        if (ns == 0) return;
-        append_solution(x, std::vector<Index>(crows.begin(), crows.end()), S,
-                        out[static_cast<std::size_t>(n)]);
+        if (ns > 0) Z.subtract(x, crows, S);
     });
-    return from_parts(out, nc, nw);
+    return Z.take(nw);
 }
 
 SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
