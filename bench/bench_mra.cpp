@@ -103,23 +103,6 @@ cg::test::GridProblem make_problem(const Eigen::Vector3i& cells, const std::stri
     return p;
 }
 
-/// Energy error of the baseline the hierarchy improves on (Chen Fig. 2): the Galerkin solution
-/// in the canonical trilinear basis of level 1, C^1 ... C^{q-1} (Eq. 6), with the hierarchy's
-/// fine operator and Dirichlet treatment.
-double canonical_error(const cg::mra::Hierarchy& h, const cg::test::GridProblem& p) {
-    cg::SparseMatrix C = h.level(1).C;
-    for (int k = 2; k < h.num_levels(); ++k) C = cg::SparseMatrix(C * h.level(k).C);
-    const cg::SparseMatrix Ct = C.transpose();
-    cg::Vector f(h.fine_dofs.size());
-    for (cg::Index i = 0; i < f.size(); ++i) f[i] = p.f[h.fine_dofs[i]];
-    cg::solve::SpdSolver solver;
-    solver.compute(cg::SparseMatrix(C * h.A_fine * Ct));
-    const cg::Vector u_present = Ct * solver.solve(cg::Vector(C * f));
-    cg::Vector u = cg::Vector::Zero(p.u.size());
-    for (cg::Index i = 0; i < u_present.size(); ++i) u[h.fine_dofs[i]] = u_present[i];
-    return cg::test::energy_norm(p.K, u - p.u) / cg::test::energy_norm(p.K, p.u);
-}
-
 int run(int argc, char** argv) {
     if (argc < 4) {
         std::fprintf(
@@ -215,7 +198,7 @@ int run(int argc, char** argv) {
                 cg::test::energy_norm(p.K, e) / cg::test::energy_norm(p.K, p.u));
     if (o.refinement == cg::mra::Refinement::Linear)
         std::printf("baseline: trilinear FEM on the coarsest grid, energy error %.4f\n",
-                    canonical_error(h, p));
+                    cg::test::canonical_energy_error(h, p));
     return 0;
 }
 

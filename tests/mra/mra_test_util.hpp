@@ -97,6 +97,24 @@ inline double energy_norm(const SparseMatrix& K, const Vector& v) {
     return std::sqrt(v.dot(K * v));
 }
 
+/// Energy error ||u_c - u||_K / ||u||_K of the baseline the hierarchy improves on (Chen Fig. 2):
+/// the Galerkin solution u_c in the canonical basis of level 1, C^1 ... C^{q-1} (Eq. 6; the
+/// trilinear FEM on the coarsest grid for the linear refinement), with h's fine operator (and
+/// Dirichlet treatment).
+inline double canonical_energy_error(const mra::Hierarchy& h, const GridProblem& p) {
+    SparseMatrix C = h.level(1).C;
+    for (int k = 2; k < h.num_levels(); ++k) C = SparseMatrix(C * h.level(k).C);
+    const SparseMatrix Ct = C.transpose();
+    Vector f(h.fine_dofs.size());
+    for (Index i = 0; i < f.size(); ++i) f[i] = p.f[h.fine_dofs[i]];
+    solve::SpdSolver solver;
+    solver.compute(SparseMatrix(C * h.A_fine * Ct));
+    const Vector u_present = Ct * solver.solve(Vector(C * f));
+    Vector u = Vector::Zero(p.u.size());
+    for (Index i = 0; i < u_present.size(); ++i) u[h.fine_dofs[i]] = u_present[i];
+    return energy_norm(p.K, u - p.u) / energy_norm(p.K, p.u);
+}
+
 /// Options for global solves without truncation or correction.
 inline mra::Options exact_options(int levels, mra::Refinement r) {
     mra::Options o;
