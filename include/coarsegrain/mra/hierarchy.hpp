@@ -160,6 +160,37 @@
 /// steps). With the dense Moore-Penrose C^† (an experiment) the square gave 0.83 / 0.45 / 0.095 /
 /// 0.012 at 1c / 2c / 4c / 6c, at C̃ density 1.
 ///
+/// In 3D (session 20: bench_mra N N N 2 rho 1e-7 fine linear 1 SCENE 1 node|cell, scenes in
+/// bench/scenes, hung under gravity; checker = bench_mra's own problem; coarsest energy error;
+/// trilinear = bench_mra's baseline, the trilinear FEM on the coarse grid; 2 threads, idle):
+///
+/// | problem          | global | node 2 / 5    | cell 2 / 3 / 5           | trilinear |
+/// |------------------|--------|---------------|--------------------------|-----------|
+/// | homogeneous 16^3 | 0.0112 | 0.694 / 0.475 | 0.0217 / 0.0213 / 0.0127 | 0.0759    |
+/// | homogeneous 24^3 | 0.0061 | 0.626 / 0.459 | 0.0171 / 0.0168 / 0.0086 | 0.0574    |
+/// | particles 16^3   | 0.0119 | 0.955 / 0.884 | 0.266 / 0.250 / 0.0946   | 0.968     |
+/// | particles 24^3   | 0.0070 | 0.913 / 0.861 | 0.274 / 0.275 / 0.120    | 0.969     |
+/// | checker 24x12x12 | 0.217  | - / 0.361     | 0.361 / 0.361 / 0.227    | 0.755     |
+///
+/// Builds in the same order (s): homogeneous 16^3 6.4; 0.9 / 4.7; 6.4 / 6.4 / 18.6. 24^3 113;
+/// 3.2 / 16; 27 / 26 / 83. Particles 16^3 8.6; 1.0 / 4.6; 6.5 / 6.3 / 18. 24^3 135; 3.2 / 16;
+/// 26 / 26 / 82. Checker 4.4; 3.3 (rho 5); 4.6 / 4.7 / 12.6.
+///
+/// The paper's node-wise localization loses to the trilinear FEM even on a homogeneous block, at
+/// every radius that builds faster than global solves: each localized function has less energy
+/// than the trilinear one (which is admissible), but each carries its own truncation error and a
+/// smooth displacement adds them up (the amplification above); the invariance correction
+/// removes only the rigid part of that sum. Cell-wise localization corrects a coarse field by the
+/// sum of its cells' correctors, each driven by the field on one cell (Henning and Peterseim's
+/// element correctors): 1.9-2.8x the global error from rho = 2 and 1.1-1.4x at rho = 5 on the
+/// homogeneous block, 1.05x on the checker at rho = 5, but 8-17x on the isolated stiff
+/// inclusions of contrast 1000 (particles.json), whose correctors decay slowly. It builds 4-8x
+/// slower than node-wise at the same radius (one factorization per coarse cell with the
+/// right-hand sides of ~27 coarse nodes, regions one coarse cell wider) and stores 2-3.8x more;
+/// it is cheaper than global solves from ~24^3 cells on. Until session 20 its Z was summed from
+/// triplets, ~10 per entry of Z (peaks of 4.4 / 11.0 GB at 16^3, rho = 3 / 5; now 0.67 / 1.57
+/// GB).
+///
 /// Why the accordion locks: there every coarse cell of a step is exactly one layer, so each
 /// coarse node sits on a stiff/soft interface and each stiff layer spans the cross-section. The
 /// same happens in 2D (the accordion as a 4x1 quad beam, one step, cell-wise, coarsest error
