@@ -74,29 +74,32 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
                                          const StepGeometry& g, const LocalizationRings& rings,
                                          int patch, bool clip);
 
-/// The part A_T of the fine operator from the fine elements inside one cell T of a coarser level
-/// (Localization::Cell): the sum of their element matrices on their present fine DOFs.
+/// The part A_T of the fine operator from the fine elements inside one block T of patch^dim
+/// cells of a coarser level (Localization::Cell; patch 1: one cell): the sum of their element
+/// matrices on their present fine DOFs.
 struct CellStiffness {
-    Eigen::Vector3i cell;  ///< grid coordinates of T on its level
+    Eigen::Vector3i cell;  ///< grid coordinates of T's first cell on its level
+    int span = 1;          ///< cells per axis of T (the last blocks of an axis may hold fewer)
     IndexVector dofs;      ///< indices into the hierarchy's present fine DOFs, sorted
-    Matrix A;              ///< dense, #dofs square
+    SparseMatrix A;        ///< #dofs square
 };
 
-/// A_T for every cell T of a level with `cells` per axis (cells without elements are left out);
-/// an element belongs to the cell containing its centroid. With the present fine DOFs
-/// `fine_dofs` (the fixed ones eliminated) sum_T A_T is the fine operator principal_submatrix(K,
-/// fine_dofs) when K is the stiffness of `materials`.
+/// A_T for every block T of patch^dim cells of a level with `cells` per axis (blocks without
+/// elements are left out); an element belongs to the cell containing its centroid. With the
+/// present fine DOFs `fine_dofs` (the fixed ones eliminated) sum_T A_T is the fine operator
+/// principal_submatrix(K, fine_dofs) when K is the stiffness of `materials`.
 std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
                                           const material::ElementMaterials& materials,
                                           const IndexVector& fine_dofs,
-                                          const Eigen::Vector3i& cells);
+                                          const Eigen::Vector3i& cells, int patch);
 
 /// Z with cell-wise localized solves (Localization::Cell): for every cell T of level k (parts),
 /// R^T = (W Φ)[:, T] A_T (C^† Φ)[:, T]^T, Φ = Φ^{k+1} on the present fine DOFs (WPhi = W Φ,
 /// CdPhi = C^† Φ), is solved on the wavelets S_T with a nonzero on a level-(k+1) node within
 /// `rings` rings of T: B[S_T, S_T] z = -R^T[S_T, :], and Z = sum_T Z^T. Since sum_T A_T = A^q,
 /// sum_T R^T = R = W A^{k+1} C^{†,T}: with regions spanning the grid this is the global Z.
-/// One factorization per cell, cells in parallel (OpenMP).
+/// One factorization per part (a cell, or a block of cells: CellStiffness), parts in parallel
+/// (OpenMP).
 SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                               const SparseMatrix& WPhi, const SparseMatrix& CdPhi,
                               const std::vector<CellStiffness>& parts, const StepGeometry& g,

@@ -196,8 +196,9 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     if (by_cell) {
         CG_VERIFY(materials != nullptr,
                   "mra: cell localization needs the element materials (build_hierarchy argument)");
-        CG_VERIFY(options.patch == 1, "mra: cell localization needs patch = 1, got {}",
-                  options.patch);
+        CG_VERIFY(options.patch == 1 || !options.patch_clip,
+                  "mra: cell localization does not clip patches (patch_clip): each cell's share "
+                  "of the right-hand side is solved on its whole patch");
         CG_VERIFY(options.dirichlet == DirichletTreatment::Eliminate ||
                       options.dirichlet == DirichletTreatment::Constrain ||
                       options.dirichlet == DirichletTreatment::Ignore,
@@ -356,7 +357,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                 const Phase phase(tag + "Z (cell-localized solves)", &h.timings);
                 Z = detail::cell_localized_z(
                     L.B, L.W, product(L.W, Phi_present), product(L.C_dagger, Phi_present),
-                    detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells), g, rings);
+                    detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells, options.patch),
+                    g, rings);
             }
             const Phase phase(tag + "C adapted", &h.timings);
             Ct = L.C_dagger + product(Z, L.W);
@@ -427,17 +429,18 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
             const Eigen::Vector3i nf = node_counts(fine_cells, dim);
             // Cell localization: node i gets rows from the cells T that (C^† Φ^{k+1})[i, :]
             // touches, within phi_reach (+1 for the linear C^†) of node i, and a cell's region
-            // reaches `rings` beyond the cell, 2 rings beyond its nodes.
+            // reaches `rings` beyond the cell's patch, 2 patch rings beyond its nodes.
             const int linear = options.refinement == Refinement::Linear ? 1 : 0;
             const int max_region_rings =
                 L.region_rings.empty()
                     ? rings
                     : *std::max_element(L.region_rings.begin(), L.region_rings.end());
-            const int reach = std::isinf(L.radius) ? nf.maxCoeff()
-                              : by_cell
-                                  ? rings + 2 + basis_reach(h, Phi_present, k + 1) + 2 * linear
-                                  : max_region_rings +
-                                        (options.patch_clip ? 0 : 2 * (options.patch - 1)) + linear;
+            const int reach =
+                std::isinf(L.radius) ? nf.maxCoeff()
+                : by_cell
+                    ? rings + 2 * options.patch + basis_reach(h, Phi_present, k + 1) + 2 * linear
+                    : max_region_rings + (options.patch_clip ? 0 : 2 * (options.patch - 1)) +
+                          linear;
             for (Index i = 0; i < coarse_nodes; ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)

@@ -570,7 +570,7 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
 std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
                                           const material::ElementMaterials& materials,
                                           const IndexVector& fine_dofs,
-                                          const Eigen::Vector3i& cells) {
+                                          const Eigen::Vector3i& cells, int patch) {
     const int dim = mesh.dim();
     CG_VERIFY(materials.size() == mesh.num_elements(),
               "mra: cell localization got {} element materials for {} elements", materials.size(),
@@ -580,8 +580,10 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
         present[static_cast<std::size_t>(fine_dofs[l])] = l;
     const Eigen::Vector3d spacing =
         (mesh.grid->max - mesh.grid->min).cwiseQuotient(cells.cast<double>());
-    const Index num_cells = cell_count(cells, dim);
-    std::vector<std::vector<Index>> members(static_cast<std::size_t>(num_cells));
+    Eigen::Vector3i blocks = Eigen::Vector3i::Ones();
+    for (int d = 0; d < dim; ++d) blocks[d] = (cells[d] + patch - 1) / patch;
+    const Index num_blocks = cell_count(blocks, dim);
+    std::vector<std::vector<Index>> members(static_cast<std::size_t>(num_blocks));
     for (Index e = 0; e < mesh.num_elements(); ++e) {
         const Eigen::VectorXd centre = mesh.element_positions(e).colwise().mean().transpose();
         Index t = 0;
@@ -589,12 +591,12 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
             const int c = std::clamp(
                 static_cast<int>(std::floor((centre[d] - mesh.grid->min[d]) / spacing[d])), 0,
                 cells[d] - 1);
-            t = t * cells[d] + c;
+            t = t * blocks[d] + c / patch;
         }
         members[static_cast<std::size_t>(t)].push_back(e);
     }
     std::vector<CellStiffness> parts;
-    for (Index t = 0; t < num_cells; ++t) {
+    for (Index t = 0; t < num_blocks; ++t) {
         const auto& elems = members[static_cast<std::size_t>(t)];
         if (elems.empty()) continue;
         std::vector<Index> dofs;
@@ -609,10 +611,11 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
         dofs.erase(std::unique(dofs.begin(), dofs.end()), dofs.end());
         CellStiffness part;
         part.cell = Eigen::Vector3i::Zero();
-        for (Index rest = t, d = 0; d < dim; rest /= cells[d], ++d)
-            part.cell[d] = static_cast<int>(rest % cells[d]);
+        for (Index rest = t, d = 0; d < dim; rest /= blocks[d], ++d)
+            part.cell[d] = static_cast<int>(rest % blocks[d]) * patch;
+        part.span = patch;
         part.dofs = Eigen::Map<const IndexVector>(dofs.data(), static_cast<Index>(dofs.size()));
-        part.A = Matrix::Zero(part.dofs.size(), part.dofs.size());
+        std::vector<Eigen::Triplet<double, Index>> entries;
         for (const Index e : elems) {
             const Matrix Ke = fem::element_stiffness(mesh.type, mesh.element_positions(e),
                                                      material::tensor(materials.of(e), dim));
@@ -629,9 +632,11 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
                 for (Index j = 0; j < Ke.cols(); ++j)
                     if (pos[static_cast<std::size_t>(i)] >= 0 &&
                         pos[static_cast<std::size_t>(j)] >= 0)
-                        part.A(pos[static_cast<std::size_t>(i)],
-                               pos[static_cast<std::size_t>(j)]) += Ke(i, j);
+                        entries.emplace_back(pos[static_cast<std::size_t>(i)],
+                                             pos[static_cast<std::size_t>(j)], Ke(i, j));
         }
+        part.A.resize(part.dofs.size(), part.dofs.size());
+        part.A.setFromTriplets(entries.begin(), entries.end());
         parts.push_back(std::move(part));
     }
     return parts;
@@ -639,11 +644,12 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
 
 namespace {
 
-/// The region of cell T: the level-(k+1) nodes within `rings` of T (its nodes 2c .. 2c + 2),
-/// as a box [lo, hi] of the grid of nf nodes.
-std::pair<Eigen::Vector3i, Eigen::Vector3i> cell_region(const Eigen::Vector3i& cell, int rings,
+/// The region of part T: the level-(k+1) nodes within `rings` of T (its nodes 2c .. 2c + 2 span,
+/// c its first cell), as a box [lo, hi] of the grid of nf nodes.
+std::pair<Eigen::Vector3i, Eigen::Vector3i> cell_region(const CellStiffness& part, int rings,
                                                         const Eigen::Vector3i& nf) {
-    return {(2 * cell.array() - rings).max(0), (2 * cell.array() + 2 + rings).min(nf.array() - 1)};
+    return {(2 * part.cell.array() - rings).max(0),
+            (2 * part.cell.array() + 2 * part.span + rings).min(nf.array() - 1)};
 }
 
 /// Rows of M with a nonzero in the columns `cols`, sorted.
@@ -673,7 +679,7 @@ class CellSum {
         std::vector<Eigen::Vector3i> lo(cols_.size(), nf),
             hi(cols_.size(), Eigen::Vector3i(-1, -1, -1));
         for (const CellStiffness& part : parts) {
-            const auto [a, b] = cell_region(part.cell, rings, nf);
+            const auto [a, b] = cell_region(part, rings, nf);
             for (const Index r : touching_rows(CdPhi, part.dofs)) {
                 lo[static_cast<std::size_t>(r)] = lo[static_cast<std::size_t>(r)].cwiseMin(a);
                 hi[static_cast<std::size_t>(r)] = hi[static_cast<std::size_t>(r)].cwiseMax(b);
@@ -752,7 +758,7 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
         const Matrix ct = column_block(CdPhi, part.dofs, crows);
         if (wrows.size() == 0 || crows.size() == 0) return;
         const Matrix rt = wt * part.A * ct.transpose();
-        const auto [lo, hi] = cell_region(part.cell, rings, nf);
+        const auto [lo, hi] = cell_region(part, rings, nf);
         box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
         const Index ns = static_cast<Index>(S.size());
         Matrix rhs = Matrix::Zero(ns, crows.size());

@@ -23,35 +23,43 @@ class MraCellLocalized : public ::testing::TestWithParam<int> {};
 
 TEST_P(MraCellLocalized, RadiusCoveringTheGridEqualsGlobalSolves) {
     // sum_T A_T = A^q, so with every region spanning the grid sum_T R^T = R and Z is the global
-    // one, at every step (the coarser steps use Φ^{k+1} A_T Φ^{k+1,T}).
+    // one, at every step (the coarser steps use Φ^{k+1} A_T Φ^{k+1,T}); also with T a block of
+    // patch^dim cells (patch 3: blocks of 3 and 1 cells per axis at the finest step).
     const int dim = GetParam();
     const Eigen::Vector3i cells = dim == 2 ? Eigen::Vector3i(8, 8, 1) : Eigen::Vector3i(4, 4, 4);
     const test::GridProblem p = test::hung_problem(dim, cells, 1.0, 1e3, test::checker_pattern);
     for (const Refinement r : {Refinement::Linear, Refinement::Dirac}) {
         const Options global = test::exact_options(3, r);
         const Hierarchy hg = build_hierarchy(p.mesh, p.K, p.bc.dofs, global);
-        const Hierarchy hc =
-            build_hierarchy(p.mesh, p.K, p.bc.dofs, cell_options(3, r, 8), &p.materials);
-        for (int k = 1; k < hg.num_levels(); ++k) {
-            // Sums of local solves (dense / sparse Cholesky) against one CHOLMOD solve, with
-            // condition numbers below ~1e6 and the element matrices summed in another order
-            // than the assembly: 1e-10 relative.
-            const SparseMatrix& Cg = hg.level(k).C_adapted.sparse();
-            EXPECT_LT(Matrix(Cg - hc.level(k).C_adapted.sparse()).norm(), 1e-10 * Matrix(Cg).norm())
-                << refinement_name(r) << " level " << k;
+        for (const int patch : {1, 2, 3}) {
+            Options cell = cell_options(3, r, 8);
+            cell.patch = patch;
+            const Hierarchy hc = build_hierarchy(p.mesh, p.K, p.bc.dofs, cell, &p.materials);
+            for (int k = 1; k < hg.num_levels(); ++k) {
+                // Sums of local solves (dense / sparse Cholesky) against one CHOLMOD solve, with
+                // condition numbers below ~1e6 and the element matrices summed in another order
+                // than the assembly: 1e-10 relative.
+                const SparseMatrix& Cg = hg.level(k).C_adapted.sparse();
+                EXPECT_LT(Matrix(Cg - hc.level(k).C_adapted.sparse()).norm(),
+                          1e-10 * Matrix(Cg).norm())
+                    << refinement_name(r) << " patch " << patch << " level " << k;
+            }
         }
     }
 }
 
-TEST_P(MraCellLocalized, NeedsMaterialsPatchOneAndNoPenalty) {
+TEST_P(MraCellLocalized, NeedsMaterialsUnclippedPatchesAndNoPenalty) {
     const int dim = GetParam();
     const Eigen::Vector3i cells = dim == 2 ? Eigen::Vector3i(4, 4, 1) : Eigen::Vector3i(4, 4, 4);
     const test::GridProblem p = test::hung_problem(dim, cells, 1.0, 10.0, test::checker_pattern);
     Options o = cell_options(3, Refinement::Linear, 2);
     EXPECT_THROW(build_hierarchy(p.mesh, p.K, p.bc.dofs, o), Error);
     o.patch = 2;
+    EXPECT_NO_THROW(build_hierarchy(p.mesh, p.K, p.bc.dofs, o, &p.materials));
+    o.patch_clip = true;
     EXPECT_THROW(build_hierarchy(p.mesh, p.K, p.bc.dofs, o, &p.materials), Error);
     o.patch = 1;
+    o.patch_clip = false;
     o.dirichlet = DirichletTreatment::Penalty;
     EXPECT_THROW(build_hierarchy(p.mesh, p.K, p.bc.dofs, o, &p.materials), Error);
 }
@@ -105,11 +113,17 @@ TEST(MraCellLocalizedRigid, ReproducesRigidMotionsAwayFromTheBoundary) {
         node.localization = Localization::Node;
         const Hierarchy hc = build_hierarchy(p.mesh, p.K, {}, cell, &p.materials);
         const Hierarchy hn = build_hierarchy(p.mesh, p.K, {}, node);
-        std::printf("%s, radius 2: rigid defect cell %.3g (interior %.3g), node %.3g (%.3g)\n",
-                    refinement_name(r).c_str(), rigid_defect(hc, 0), rigid_defect(hc, 9),
-                    rigid_defect(hn, 0), rigid_defect(hn, 6));
+        Options patch = cell;
+        patch.patch = 2;
+        const Hierarchy hp = build_hierarchy(p.mesh, p.K, {}, patch, &p.materials);
+        std::printf(
+            "%s, radius 2: rigid defect cell %.3g (interior %.3g), patch 2 %.3g (%.3g), "
+            "node %.3g (%.3g)\n",
+            refinement_name(r).c_str(), rigid_defect(hc, 0), rigid_defect(hc, 9),
+            rigid_defect(hp, 0), rigid_defect(hp, 11), rigid_defect(hn, 0), rigid_defect(hn, 6));
         if (r == Refinement::Linear) {
             EXPECT_LT(rigid_defect(hc, 9), 1e-11);
+            EXPECT_LT(rigid_defect(hp, 11), 1e-11);
             EXPECT_GT(rigid_defect(hn, 6), 1e-3);
         }
     }

@@ -557,7 +557,9 @@ struct Options {
     /// within rho rings of any of them, and one factorization of B^k on it for all their
     /// columns. 1: the paper's per-node regions. A larger patch enlarges every node's region
     /// (at least as accurate as patch 1 with the same rho) and divides the number of
-    /// factorizations by patch^dim.
+    /// factorizations by patch^dim. With Localization::Cell, a block of patch^dim coarse cells
+    /// is one part T: one region (rho rings around the block) and one factorization for the
+    /// sum of its cells' right-hand sides.
     int patch = 1;
     /// With patch > 1, each node keeps from its patch's solution only the wavelets within its
     /// own rho rings (zeroes the rest), so its basis function has the support of patch 1: C̃
@@ -565,8 +567,9 @@ struct Options {
     /// no longer minimize the energy on their support; see "Clipped patches" above for what that
     /// costs each refinement.
     bool patch_clip = false;
-    /// Node- or cell-wise localization (finite radii only; Cell needs patch 1 and the Eliminate
-    /// or Constrain treatment, whose fine operator is the sum of the element matrices).
+    /// Node- or cell-wise localization (finite radii only; Cell needs the Eliminate, Constrain
+    /// or Ignore treatment, whose fine operator is the sum of the element matrices, and no
+    /// patch_clip).
     Localization localization = Localization::Node;
     Measurement measurement = Measurement::Canonical;
     /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, the d
