@@ -305,15 +305,21 @@ Matrix solve_region(const SparseMatrix& B, const std::vector<Index>& S,
     return x;
 }
 
-/// The columns `cols` of M as a dense block over the rows where they have a nonzero (`rows`,
-/// sorted).
-Matrix column_block(const SparseMatrix& M, const IndexVector& cols, IndexVector& rows) {
+/// Rows of M with a nonzero in the columns `cols`, sorted.
+std::vector<Index> touching_rows(const SparseMatrix& M, const IndexVector& cols) {
     std::vector<Index> r;
     for (const Index c : cols)
         for (SparseMatrix::InnerIterator it(M, c); it; ++it)
             r.push_back(static_cast<Index>(it.row()));
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());
+    return r;
+}
+
+/// The columns `cols` of M as a dense block over the rows where they have a nonzero (`rows`,
+/// sorted).
+Matrix column_block(const SparseMatrix& M, const IndexVector& cols, IndexVector& rows) {
+    const std::vector<Index> r = touching_rows(M, cols);
     rows = Eigen::Map<const IndexVector>(r.data(), static_cast<Index>(r.size()));
     Matrix block = Matrix::Zero(rows.size(), cols.size());
     for (Index q = 0; q < cols.size(); ++q)
@@ -650,17 +656,6 @@ std::pair<Eigen::Vector3i, Eigen::Vector3i> cell_region(const CellStiffness& par
                                                         const Eigen::Vector3i& nf) {
     return {(2 * part.cell.array() - rings).max(0),
             (2 * part.cell.array() + 2 * part.span + rings).min(nf.array() - 1)};
-}
-
-/// Rows of M with a nonzero in the columns `cols`, sorted.
-std::vector<Index> touching_rows(const SparseMatrix& M, const IndexVector& cols) {
-    std::vector<Index> r;
-    for (const Index c : cols)
-        for (SparseMatrix::InnerIterator it(M, c); it; ++it)
-            r.push_back(static_cast<Index>(it.row()));
-    std::sort(r.begin(), r.end());
-    r.erase(std::unique(r.begin(), r.end()), r.end());
-    return r;
 }
 
 /// Z = sum_T Z^T, summed in place. Row r's pattern is the wavelets of the bounding box of the
