@@ -191,6 +191,28 @@
 /// triplets, ~10 per entry of Z (peaks of 4.4 / 11.0 GB at 16^3, rho = 3 / 5; now 0.67 / 1.57
 /// GB).
 ///
+/// Patches of cells (Options::patch with Localization::Cell: a block of patch^dim cells is one
+/// part, with one region of rho rings around the block and one factorization for the sum of
+/// its cells' right-hand sides) on Table 1's box (bench_mra 40 20 20 2 rho 1e-7 fine linear P
+/// checker 1 cell; global solves 0.1716 in 137.8 s with 1.97 GB, node-wise rho = 5 0.58 in
+/// 20-23 s with 361 MB; coarsest error, build s, storage MB, build peak GB):
+///
+/// | rho, patch | error  | x global | build s | localized solves s | A^1 s | storage | peak |
+/// |------------|--------|----------|---------|--------------------|-------|---------|------|
+/// | 3, 1       | 0.333  | 1.94     | 28.6    | 20.6               | 5.5   | 615     | 2.8  |
+/// | 5, 1       | 0.1998 | 1.16     | 90.1    | 73.3               | 12.7  | 911     | 4.9  |
+/// | 2 (= 3), 2 | 0.257  | 1.50     | 23.2-24.1 | 11.5-11.9        | 8.6-8.9 | 755-762 | 3.8-3.9 |
+/// | 5, 2       | 0.1793 | 1.04     | 52.0    | 27.0               | 18.1  | 1042    | 5.4  |
+/// | 2, 3       | 0.224  | 1.31     | 30.8    | 13.5               | 12.5  | 891     | 4.7  |
+/// | 5, 3       | 0.1779 | 1.04     | 59.8    | 24.7               | 22.7  | 1185    | 7.3  |
+/// | 1, 4       | 0.438  | 2.55     | 36.6    | 25.2               | 7.9   | 695     | 3.8  |
+///
+/// So cell-wise rho = 5 with patch 2 is as accurate as global solves here (1.04x) in 38% of
+/// their time and 53% of their storage, and rho = 2 with patch 2 meets the 1.5x in 24 s;
+/// both are far from the paper's 15 s, and the Galerkin product A^1 with the wider C̃ is now a
+/// third of the build. A patch 2 on the homogeneous block at 16^3, rho = 3: error 0.0180
+/// against 0.0213 with patch 1, localized solves 2.4 s against 4.8 s, storage 143 against 124 MB.
+///
 /// Why the accordion locks: there every coarse cell of a step is exactly one layer, so each
 /// coarse node sits on a stiff/soft interface and each stiff layer spans the cross-section. The
 /// same happens in 2D (the accordion as a 4x1 quad beam, one step, cell-wise, coarsest error
