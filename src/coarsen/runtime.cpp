@@ -8,6 +8,22 @@
 
 namespace coarsegrain::coarsen {
 
+FineMap::FineMap(SparseMatrix M)
+    : rows_(M.rows()),
+      cols_(M.cols()),
+      apply_([M = std::move(M)](const Vector& u) -> Vector { return M * u; }) {}
+
+FineMap::FineMap(Index rows, Index cols, Apply apply)
+    : rows_(rows), cols_(cols), apply_(std::move(apply)) {}
+
+Vector FineMap::apply(const Vector& u) const {
+    CG_VERIFY(u.size() == cols_, "fine map: {} coarse values for {} coarse DOFs", u.size(), cols_);
+    if (!apply_) return Vector::Zero(rows_);
+    Vector out = apply_(u);
+    CG_VERIFY(out.size() == rows_, "fine map: {} fine values for {} fine DOFs", out.size(), rows_);
+    return out;
+}
+
 namespace {
 
 double max_nodal_norm(const Vector& u, int dim) {

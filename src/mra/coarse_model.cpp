@@ -249,7 +249,9 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source) {
     return o;
 }
 
-coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
+coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierarchy,
+                                  const Vector& f_fine) {
+    const Hierarchy& h = *hierarchy;
     const Level& L1 = h.level(1);
     const int dim = h.dim;
     const Index nodes = grid_nodes(L1.cells, dim);
@@ -276,8 +278,10 @@ coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine) {
     m.K = P * symmetric_from_lower(L1.A) * SparseMatrix(P.transpose());
     m.K.makeCompressed();
     m.f = P * coarse_grain(h, f_fine, 1);
-    m.to_fine = SparseMatrix(basis(h, 1).transpose()) * SparseMatrix(P.transpose());
-    m.to_fine.makeCompressed();
+    m.to_fine = coarsen::FineMap(h.fine_grid_dofs(), n,
+                                 [hierarchy, Pt = SparseMatrix(P.transpose())](const Vector& u) {
+                                     return reconstruct(*hierarchy, Pt * u, 1);
+                                 });
     // Held at zero: the DOFs without a basis function, and the boundary-blind level's fixed ones.
     std::vector<Index> held(L1.dropped_dofs.data(),
                             L1.dropped_dofs.data() + L1.dropped_dofs.size());
@@ -411,7 +415,7 @@ coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::
                      fine.mesh.grid->cells[d], d);
     const auto h = std::make_shared<const Hierarchy>(
         build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
-    coarsen::CoarseModel m = coarse_model(*h, fine.f);
+    coarsen::CoarseModel m = coarse_model(h, fine.f);
     m.compare_with_fine = [h, build_levels = m.report["levels"], compare](
                               const scene::Scene&, const scene::FineModel& f, const Vector&) {
         return compare_levels(*h, f, build_levels, compare);

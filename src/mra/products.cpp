@@ -124,6 +124,18 @@ bool dense_product_pays(const SparseMatrix& X, const SparseMatrix& Y) {
 /// C̃ 92% dense (global solves at the coarse step of three levels).
 constexpr double kDenseCongruence = 0.5;
 
+/// The dense congruence holds M, X M^T and the result densely, and X too if it is dense enough
+/// (kSparseDensePenalty): at most this many entries in all (2.4 GB). The coarse step of three
+/// levels on 64x16x16 hexes after global solves (M = C̃^1 1275 x 8019, X = A^2 86% dense: 8.6e7
+/// entries, 0.7 GB) took 6.5 s instead of 49.7 s in the grouped kernel, within the 9.7 GB peak
+/// of that build.
+constexpr double kDenseCongruenceMaxEntries = 3e8;
+
+/// Eigen's sparse times dense product costs about this many times more per multiply-add than a
+/// dense one: X (8019 square, 10% / 50% dense, banded) times an 8019 x 1275 dense matrix took
+/// 15.4 / 53.2 s against 11.3 / 5.5 s dense (2 threads, loaded), 0.7-1.1 against ~15 GFlop/s.
+constexpr double kSparseDensePenalty = 15;
+
 /// Columns per block of the dense products.
 constexpr Index kDenseBlock = 128;
 
@@ -143,22 +155,53 @@ SparseMatrix dense_product(const SparseMatrix& X, const SparseMatrix& Y) {
     return out;
 }
 
+/// X M^T for a sparse or dense X and a dense M, by block columns in parallel (OpenMP).
+template <class XMatrix>
+Matrix times_transpose(const XMatrix& X, const Matrix& M) {
+    const Index m = M.rows();
+    Matrix P(X.rows(), m);
+#pragma omp parallel for schedule(dynamic, 1) if (m > kDenseBlock)
+    for (Index b = 0; b < m; b += kDenseBlock) {
+        const Index nb = std::min(kDenseBlock, m - b);
+        P.middleCols(b, nb).noalias() = X * M.middleRows(b, nb).transpose();
+    }
+    return P;
+}
+
 /// The lower triangle of M Y (M Y symmetric up to round-off), dense: block columns of the lower
 /// triangle in parallel (OpenMP). Half the multiply-adds of M Y, on every thread (Eigen's own
 /// products run on one thread here).
-SparseMatrix dense_lower_product(const SparseMatrix& M, const SparseMatrix& Y) {
-    const Matrix Md(M), Yd(Y);
-    const Index m = Md.rows();
+SparseMatrix dense_lower_product(const Matrix& M, const Matrix& Y) {
+    const Index m = M.rows();
     Matrix P(m, m);
 #pragma omp parallel for schedule(dynamic, 1) if (m > kDenseBlock)
     for (Index b = 0; b < m; b += kDenseBlock) {
         const Index nb = std::min(kDenseBlock, m - b);
-        P.block(b, b, m - b, nb).noalias() = Md.bottomRows(m - b) * Yd.middleCols(b, nb);
+        P.block(b, b, m - b, nb).noalias() = M.bottomRows(m - b) * Y.middleCols(b, nb);
     }
     for (Index j = 1; j < m; ++j) P.col(j).head(j).setZero();
     SparseMatrix out = P.sparseView(0.0, 0.0);
     out.makeCompressed();
     return out;
+}
+
+/// Whether products with X are cheaper through a dense copy of X (kSparseDensePenalty).
+bool dense_pays(const SparseMatrix& X) {
+    return kSparseDensePenalty * static_cast<double>(X.nonZeros()) > entries(X);
+}
+
+/// The lower triangle of M X M^T, dense (congruence for at least half-dense M), X densely where
+/// that pays (dense_pays).
+SparseMatrix dense_congruence(const SparseMatrix& M, const SparseMatrix& X) {
+    const Matrix Md(M);
+    return dense_lower_product(
+        Md, dense_pays(X) ? times_transpose(Matrix(X), Md) : times_transpose(X, Md));
+}
+
+/// Whether dense_congruence fits kDenseCongruenceMaxEntries.
+bool dense_congruence_fits(const SparseMatrix& M, const SparseMatrix& X) {
+    const double m = static_cast<double>(M.rows()), n = static_cast<double>(M.cols());
+    return 2 * m * n + m * m + (dense_pays(X) ? n * n : 0) <= kDenseCongruenceMaxEntries;
 }
 
 /// Grouped congruence: per thread, one map from keys (DOF indices) to dense rows of W values.
@@ -419,10 +462,10 @@ SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
     CG_VERIFY(covered == M.rows() && widest <= kMaxGroup,
               "mra: congruence groups cover {} of {} rows, widest {} (at most {})", covered,
               M.rows(), widest, kMaxGroup);
+    if (static_cast<double>(M.nonZeros()) >= kDenseCongruence * entries(M) &&
+        dense_congruence_fits(M, X))
+        return dense_congruence(M, X);
     const SparseMatrix Mt = M.transpose();
-    if (dense_product_fits(M, Mt) &&
-        static_cast<double>(M.nonZeros()) >= kDenseCongruence * entries(M))
-        return dense_lower_product(M, product(X, Mt));
     if (widest <= 8) return grouped_congruence<8>(M, Mt, X, groups);
     if (widest <= 16) return grouped_congruence<16>(M, Mt, X, groups);
     if (widest <= 24) return grouped_congruence<24>(M, Mt, X, groups);

@@ -21,9 +21,9 @@ SparseMatrix symmetrized(const SparseMatrix& M);
 ///
 /// `groups` partitions the rows of M (the columns of the result) into groups of rows with
 /// nearby supports, e.g. node_blocks of the coarse level. Unless M is at least half dense (then
-/// the product is dense, in parallel), each group J of at most kMaxGroup rows is done at once: (X
-/// M^T)[:, J] is accumulated densely over the union of the supports of M's rows J, then M (X
-/// M^T)[:, J], by M's columns at that union or, where at least half of the entries scanned meet
+/// the product is dense, in parallel, X too if it is dense enough, up to 3e8 entries in all),
+/// each group J of at most kMaxGroup rows is done at once: (X M^T)[:, J] is accumulated densely
+/// over the union of the supports of M's rows J, then M (X M^T)[:, J], by M's columns at that union or, where at least half of the entries scanned meet
 /// it (dense-ish M, e.g. after global solves), by M's rows with each result row in registers.
 /// Every column of M is read once per group instead of once per row of M, and the inner loops
 /// are dense |J|-wide multiply-adds: on a 40x20x20 hex grid after localized solves (rho = 5

@@ -48,8 +48,9 @@ TEST(CoarseRuntime, FineModelAsItsOwnCoarseModelHasNoError) {
     m.K = fine.K;
     m.f = fine.f;
     m.bc = fine.bc;
-    m.to_fine = SparseMatrix(fine.K.rows(), fine.K.cols());
-    m.to_fine.setIdentity();
+    SparseMatrix identity(fine.K.rows(), fine.K.cols());
+    identity.setIdentity();
+    m.to_fine = identity;
     const coarsen::CoarseSolution uc = coarsen::solve_static(m, sc.solver);
     const Vector u = scene::solve_static(fine, sc.solver).u;
     const coarsen::Errors e = coarsen::compare(fine, u, uc.u_fine);
@@ -99,6 +100,25 @@ TEST(CoarseRuntime, GalerkinModelIsTheEnergyProjection) {
     const coarsen::Errors e = coarsen::compare(fine, u, uc.u_fine);
     EXPECT_GT(e.energy_rel, 0.05);  // a real coarsening error, not a trivial case
     EXPECT_NEAR(e.compliance_ratio, 1.0 - e.energy_rel * e.energy_rel, 1e-10);
+}
+
+TEST(FineMap, AppliesItsMatrixOrItsFunctionAndChecksSizes) {
+    SparseMatrix M(3, 2);
+    M.insert(0, 0) = 2.0;
+    M.insert(2, 1) = -1.0;
+    const coarsen::FineMap by_matrix = M;
+    const coarsen::FineMap by_function(3, 2, [&M](const Vector& u) { return Vector(M * u); });
+    const Vector u = Vector::LinSpaced(2, 1.0, 3.0);
+    const Matrix U = Matrix::Random(2, 4);
+    for (const coarsen::FineMap* f : {&by_matrix, &by_function}) {
+        EXPECT_EQ(f->rows(), 3);
+        EXPECT_EQ(f->cols(), 2);
+        EXPECT_EQ(*f * u, Vector(M * u));  // the same arithmetic: bit for bit
+        EXPECT_EQ(*f * U, Matrix(M * U));
+        test::expect_error([&] { (void)(*f * Vector::Ones(3)); }, "3 coarse values for 2");
+    }
+    const coarsen::FineMap short_output(3, 2, [](const Vector&) { return Vector::Ones(2); });
+    test::expect_error([&] { (void)(short_output * u); }, "2 fine values for 3 fine DOFs");
 }
 
 TEST(CoarseRuntime, MismatchedSizesAreAnError) {

@@ -52,6 +52,42 @@ struct Reconstruction {
     std::string report_pointer;
 };
 
+/// The linear map that carries a coarse displacement to the fine DOFs: a sparse matrix (the
+/// effective tensors' barycentric or linearized harmonic map, the baselines), or a function that
+/// applies it without forming it (mra: Φ^{1,T} S, level by level through the C̃^k. Forming Φ^1
+/// of a three-level hierarchy after global solves on 64x16x16 hexes, 1275 x 55488 and nearly
+/// dense, took 80-110 s and raised the run's peak from 6.8 to 9.7 GB; applying it takes
+/// milliseconds).
+class FineMap {
+  public:
+    using Apply = std::function<Vector(const Vector&)>;
+    FineMap() = default;
+    /// u -> M u
+    FineMap(SparseMatrix M);  // NOLINT(google-explicit-constructor): a matrix is such a map
+    /// u -> apply(u), from `cols` coarse to `rows` fine DOFs
+    FineMap(Index rows, Index cols, Apply apply);
+    Index rows() const { return rows_; }
+    Index cols() const { return cols_; }
+    /// The fine displacement of coarse DOFs u (cols() entries).
+    /// @throws Error if u has the wrong size
+    Vector apply(const Vector& u) const;
+    /// apply() of a vector, or of each column of a matrix.
+    template <class Derived>
+    auto operator*(const Eigen::MatrixBase<Derived>& U) const {
+        if constexpr (Derived::ColsAtCompileTime == 1) {
+            return apply(U);
+        } else {
+            Matrix out(rows_, U.cols());
+            for (Index j = 0; j < U.cols(); ++j) out.col(j) = apply(U.col(j));
+            return out;
+        }
+    }
+
+  private:
+    Index rows_ = 0, cols_ = 0;
+    Apply apply_;
+};
+
 /// What a method adds once the fine solution is known.
 struct FineComparison {
     /// Merged into summary "coarse" as an RFC 7386 merge patch (its keys replace the model's).
@@ -69,15 +105,15 @@ using CompareWithFine = std::function<FineComparison(
 /// A coarse model: an operator on coarse DOFs, its load and conditions, and the linear map that
 /// carries a coarse displacement to the fine nodes.
 struct CoarseModel {
-    std::string method;    ///< "effective-tensor", "naive", "voigt", "reuss", "mra"
-    Index nodes = 0;       ///< coarse nodes (mra: nodes of the coarsest grid)
-    Index elements = 0;    ///< coarse elements (mra: cells of the coarsest grid)
-    SparseMatrix K;        ///< coarse stiffness over all coarse DOFs, both triangles stored
-    Vector f;              ///< coarse load, one entry per coarse DOF
-    fem::Dirichlet bc;     ///< coarse Dirichlet conditions (empty when built into K)
-    SparseMatrix to_fine;  ///< fine DOFs x coarse DOFs: u_fine = to_fine * u_coarse
-    Vector mass;           ///< lumped mass per coarse DOF; empty if the method defines none
-    Timings timings;       ///< build phases; their sum is reported as coarse.timings.build
+    std::string method;  ///< "effective-tensor", "naive", "voigt", "reuss", "mra"
+    Index nodes = 0;     ///< coarse nodes (mra: nodes of the coarsest grid)
+    Index elements = 0;  ///< coarse elements (mra: cells of the coarsest grid)
+    SparseMatrix K;      ///< coarse stiffness over all coarse DOFs, both triangles stored
+    Vector f;            ///< coarse load, one entry per coarse DOF
+    fem::Dirichlet bc;   ///< coarse Dirichlet conditions (empty when built into K)
+    FineMap to_fine;     ///< fine DOFs x coarse DOFs: u_fine = to_fine * u_coarse
+    Vector mass;         ///< lumped mass per coarse DOF; empty if the method defines none
+    Timings timings;     ///< build phases; their sum is reported as coarse.timings.build
     nlohmann::json report = nlohmann::json::object();  ///< method figures for summary "coarse"
     std::vector<VtuOutput> outputs;                    ///< extra files for the output folder
     /// Optional (empty: none): called once by the runtime after the fine and coarse solves.

@@ -1,5 +1,6 @@
 #pragma once
 /// @file The material-adapted hierarchy as a coarsening method (`coarsen --method mra`).
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -38,8 +39,9 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source);
 /// Level::dropped_dofs) have empty rows and columns and are fixed at 0 in bc, as are, on a
 /// boundary-blind hierarchy, the DOFs of Level::fixed. `report` holds the
 /// options and per level: nodes, dofs, wavelets, radius, build_seconds, nnz and density of C̃,
-/// A and B, and storage bytes of Φ and Ψ; `timings` the phases of h.
-coarsen::CoarseModel coarse_model(const Hierarchy& h, const Vector& f_fine);
+/// A and B, and storage bytes of Φ and Ψ; `timings` the phases of h. to_fine keeps h and
+/// applies Φ^{1,T} level by level (reconstruct) without forming Φ^1.
+coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, const Vector& f_fine);
 
 /// Options of compare_levels, read from the scene's "coarse" block (parse_compare_options).
 struct CompareOptions {
