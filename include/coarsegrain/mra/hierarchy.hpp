@@ -176,6 +176,15 @@
 /// 3.2 / 16; 27 / 26 / 83. Particles 16^3 8.6; 1.0 / 4.6; 6.5 / 6.3 / 18. 24^3 135; 3.2 / 16;
 /// 26 / 26 / 82. Checker 4.4; 3.3 (rho 5); 4.6 / 4.7 / 12.6.
 ///
+/// The accordion beam at 64x16x16 (examples/accordion with 3 levels to 16x4x4: the fine step's
+/// coarse cells are half a layer wide; session 21, `coarsen --method mra-linear`, coarsest
+/// energy error): global solves 0.0111 (build 157 s, idle: the fine step's solves 61 s and its
+/// A^2 77 s); cell-wise rho = 2 fine rings with patch 2 at the fine step and global solves at the
+/// coarse one 0.159 (build 124 s on a loaded machine: cell solves 37 s, C̃ 12 s, A^2 16 s, and
+/// A^1 44 s, before the dense Galerkin product for a half-dense A^{k+1}). As in 2D, where two
+/// coarse cells per layer need rho = 8 to 16 fine rings (0.21 at rho = 2: "Why the accordion
+/// locks" below), rho = 2 is far from the global error.
+///
 /// The paper's node-wise localization loses to the trilinear FEM even on a homogeneous block, at
 /// every radius that builds faster than global solves: each localized function has less energy
 /// than the trilinear one (which is admissible), but each carries its own truncation error and a
