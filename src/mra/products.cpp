@@ -131,33 +131,28 @@ constexpr double kDenseCongruence = 0.5;
 /// of that build.
 constexpr double kDenseCongruenceMaxEntries = 3e8;
 
-/// Eigen's sparse times dense product costs about this many times more per multiply-add than a
-/// dense one: X (8019 square, 10% / 50% dense, banded) times an 8019 x 1275 dense matrix took
-/// 15.4 / 53.2 s against 11.3 / 5.5 s dense (2 threads, loaded), 0.7-1.1 against ~15 GFlop/s.
-constexpr double kSparseDensePenalty = 15;
+/// Eigen's sparse times dense product costs about this many times more per multiply-add than
+/// BLAS's dense one: X (8019 square, banded) times an 8019 x 1275 dense matrix took 0.26 / 0.47 /
+/// 1.12 s at 1 / 2 / 5% density against 1.14-1.17 s by dgemm, X's dense copy included (2
+/// threads, idle).
+constexpr double kSparseDensePenalty = 20;
 
-/// Columns per block of the dense products.
+/// Columns per block of the sparse times dense product and of the lower triangle's dense product.
 constexpr Index kDenseBlock = 128;
+constexpr Index kLowerBlock = 512;
 
-/// X Y dense, block columns in parallel (OpenMP; Eigen's own products run on one thread here;
-/// a single block stays on the calling thread). Exact zeros are not stored.
+/// X Y dense (BLAS, solve::gemm). Exact zeros are not stored.
 SparseMatrix dense_product(const SparseMatrix& X, const SparseMatrix& Y) {
     const Matrix Xd(X), Yd(Y);
-    const Index n = Yd.cols();
-    Matrix P(Xd.rows(), n);
-#pragma omp parallel for schedule(dynamic, 1) if (n > kDenseBlock)
-    for (Index b = 0; b < n; b += kDenseBlock) {
-        const Index nb = std::min(kDenseBlock, n - b);
-        P.middleCols(b, nb).noalias() = Xd * Yd.middleCols(b, nb);
-    }
+    Matrix P(Xd.rows(), Yd.cols());
+    solve::gemm(Xd, false, Yd, false, 0.0, P);
     SparseMatrix out = P.sparseView(0.0, 0.0);
     out.makeCompressed();
     return out;
 }
 
-/// X M^T for a sparse or dense X and a dense M, by block columns in parallel (OpenMP).
-template <class XMatrix>
-Matrix times_transpose(const XMatrix& X, const Matrix& M) {
+/// X M^T for a sparse X and a dense M, by block columns in parallel (OpenMP).
+Matrix times_transpose(const SparseMatrix& X, const Matrix& M) {
     const Index m = M.rows();
     Matrix P(X.rows(), m);
 #pragma omp parallel for schedule(dynamic, 1) if (m > kDenseBlock)
@@ -168,16 +163,22 @@ Matrix times_transpose(const XMatrix& X, const Matrix& M) {
     return P;
 }
 
-/// The lower triangle of M Y (M Y symmetric up to round-off), dense: block columns of the lower
-/// triangle in parallel (OpenMP). Half the multiply-adds of M Y, on every thread (Eigen's own
-/// products run on one thread here).
+/// X M^T for dense X and M (BLAS).
+Matrix times_transpose(const Matrix& X, const Matrix& M) {
+    Matrix P(X.rows(), M.rows());
+    solve::gemm(X, false, M, true, 0.0, P);
+    return P;
+}
+
+/// The lower triangle of M Y (M Y symmetric up to round-off), dense: the lower block columns by
+/// BLAS, about half the multiply-adds of M Y.
 SparseMatrix dense_lower_product(const Matrix& M, const Matrix& Y) {
     const Index m = M.rows();
-    Matrix P(m, m);
-#pragma omp parallel for schedule(dynamic, 1) if (m > kDenseBlock)
-    for (Index b = 0; b < m; b += kDenseBlock) {
-        const Index nb = std::min(kDenseBlock, m - b);
-        P.block(b, b, m - b, nb).noalias() = M.bottomRows(m - b) * Y.middleCols(b, nb);
+    Matrix P = Matrix::Zero(m, m);
+    for (Index b = 0; b < m; b += kLowerBlock) {
+        const Index nb = std::min(kLowerBlock, m - b);
+        solve::gemm(M.bottomRows(m - b), false, Y.middleCols(b, nb), false, 0.0,
+                    P.block(b, b, m - b, nb));
     }
     for (Index j = 1; j < m; ++j) P.col(j).head(j).setZero();
     SparseMatrix out = P.sparseView(0.0, 0.0);

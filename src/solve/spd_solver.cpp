@@ -29,6 +29,9 @@
 // character arguments.
 extern "C" {
 void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t);
+void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
+            const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,
+            const double* beta, double* c, const int* ldc, std::size_t, std::size_t);
 }
 
 namespace coarsegrain::solve {
@@ -236,36 +239,6 @@ std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
     return {std::move(perm), "node-" + name};
 }
 
-// CHOLMOD's supernodal kernels call BLAS (dpotrf, dsyrk, dgemm, dtrsm on the supernodes), where
-// most of a large factorization's time goes. Debian's OpenBLAS (libopenblas0-pthread) runs its
-// own thread pool, which by default would use every core even with --threads 1; so before each
-// factorization its thread count is set to OpenMP's (omp_get_max_threads: --threads or
-// OMP_NUM_THREADS, else all cores), unless the user set OPENBLAS_NUM_THREADS. The two pools take
-// turns: no OpenMP region runs inside a factorization, and idle OpenBLAS threads spin for at
-// most about 0.1 s (2^28 cycles, OpenBLAS's default) before sleeping.
-// On an idle 2-core machine, 2 threads took the factorize phase of bench/ccx_vs_coarsegrain.py's
-// problem from 3.93 s to 2.56 s (an earlier measurement on the 56K-DOF demo found one thread as
-// fast: 2.0 s against 2.0-2.2 s). OpenBLAS threads spin while they wait for work, and each BLAS
-// call waits for its slowest thread: on a machine whose cores are busy with other jobs 2 threads
-// are slower than one (that factorization, load average 6 on 2 cores: median 4.3 s against
-// 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s against 4.7 s), so such
-// runs should pass --threads 1. The OpenMP build of OpenBLAS (libopenblas0-openmp, which would
-// share coarsegrain's OpenMP pool) is not a cure: under the same load its 2-thread
-// factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads build. Other
-// BLAS libraries (no openblas_set_num_threads symbol) are left alone. Inside an OpenMP parallel
-// region (the hierarchy's localized solves: one factorization per thread) BLAS gets one thread:
-// with OpenMP's count, the 2 threads' concurrent factorizations each woke both OpenBLAS threads
-// (24x12x12 hex checker, rho = 5, 2 threads: localized solves 25.6 s, 18.5 s with one).
-// `serial`: one thread whatever OpenMP's count (small dense factorizations, kDenseParallelMin).
-void match_blas_threads(bool serial = false) {
-    static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
-    if (user_set) return;
-    using SetThreads = void (*)(int);
-    static const auto set =
-        reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
-    if (set) set(serial || omp_in_parallel() ? 1 : omp_get_max_threads());
-}
-
 // Dense factorizations (DenseCholesky) of fewer unknowns run LAPACK on one thread: waking the
 // second OpenBLAS thread costs more than it shares. Measured (dpotrf, 2 cores, 2 threads
 // against 1): 243 unknowns 0.40 ms against 0.30-0.33 ms, 400: 1.15 against 1.0-1.04 ms, 800:
@@ -403,6 +376,63 @@ void check_dense_values(const Matrix& D, const std::string& where) {
 }
 
 }  // namespace
+
+// CHOLMOD's supernodal kernels call BLAS (dpotrf, dsyrk, dgemm, dtrsm on the supernodes), where
+// most of a large factorization's time goes (gemm calls it too). Debian's OpenBLAS
+// (libopenblas0-pthread) runs its own thread pool, which by default would use every core even
+// with --threads 1; so before each factorization and each gemm its thread count is set to OpenMP's
+// (omp_get_max_threads: --threads or OMP_NUM_THREADS, else all cores), unless the user set
+// OPENBLAS_NUM_THREADS. The two pools take turns: no OpenMP region runs inside a factorization, and
+// idle OpenBLAS threads spin for at most about 0.1 s (2^28 cycles, OpenBLAS's default) before
+// sleeping. On an idle 2-core machine, 2 threads took the factorize phase of
+// bench/ccx_vs_coarsegrain.py's problem from 3.93 s to 2.56 s (an earlier measurement on the
+// 56K-DOF demo found one thread as fast: 2.0 s against 2.0-2.2 s). OpenBLAS threads spin while they
+// wait for work, and each BLAS call waits for its slowest thread: on a machine whose cores are busy
+// with other jobs 2 threads are slower than one (that factorization, load average 6 on 2 cores:
+// median 4.3 s against 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s
+// against 4.7 s), so such runs should pass --threads 1. The OpenMP build of OpenBLAS
+// (libopenblas0-openmp, which would share coarsegrain's OpenMP pool) is not a cure: under the same
+// load its 2-thread factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads
+// build. Other BLAS libraries (no openblas_set_num_threads symbol) are left alone. Inside an OpenMP
+// parallel region (the hierarchy's localized solves: one factorization per thread) BLAS gets one
+// thread: with OpenMP's count, the 2 threads' concurrent factorizations each woke both OpenBLAS
+// threads (24x12x12 hex checker, rho = 5, 2 threads: localized solves 25.6 s, 18.5 s with one).
+void match_blas_threads(bool serial) {
+    static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
+    if (user_set) return;
+    using SetThreads = void (*)(int);
+    static const auto set =
+        reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    if (set) set(serial || omp_in_parallel() ? 1 : omp_get_max_threads());
+}
+
+void gemm(const Eigen::Ref<const Matrix>& A, bool transpose_a, const Eigen::Ref<const Matrix>& B,
+          bool transpose_b, double beta, Eigen::Ref<Matrix> C) {
+    using Eigen::Index;  // dense sizes are ptrdiff_t; BLAS takes int
+    const Index m = transpose_a ? A.cols() : A.rows(), k = transpose_a ? A.rows() : A.cols();
+    const Index kb = transpose_b ? B.cols() : B.rows(), n = transpose_b ? B.rows() : B.cols();
+    CG_VERIFY(kb == k && C.rows() == m && C.cols() == n, "gemm: {}x{} times {}x{} into {}x{}", m, k,
+              kb, n, C.rows(), C.cols());
+    if (m == 0 || n == 0) return;
+    if (k == 0) {
+        if (beta == 0.0)
+            C.setZero();
+        else
+            C *= beta;
+        return;
+    }
+    const auto blas_int = [](Index v) {
+        CG_VERIFY(v <= std::numeric_limits<int>::max(), "gemm: dimension {} exceeds BLAS's int", v);
+        return static_cast<int>(v);
+    };
+    const int mi = blas_int(m), ni = blas_int(n), ki = blas_int(k);
+    const int lda = blas_int(A.outerStride()), ldb = blas_int(B.outerStride()),
+              ldc = blas_int(C.outerStride());
+    const double one = 1.0;
+    match_blas_threads();
+    dgemm_(transpose_a ? "T" : "N", transpose_b ? "T" : "N", &mi, &ni, &ki, &one, A.data(), &lda,
+           B.data(), &ldb, &beta, C.data(), &ldc, 1, 1);
+}
 
 std::vector<Index> column_groups(const SparseMatrix& A, int max_size) {
     const int* outer = A.outerIndexPtr();

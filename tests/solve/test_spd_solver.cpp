@@ -700,3 +700,30 @@ TEST(SpdSolver, LowerTriangleAloneSolvesLikeTheWholeMatrix) {
         EXPECT_GE(numerically_singular, 1) << scale;
     }
 }
+
+namespace coarsegrain::solve {
+namespace {
+
+// BLAS dgemm against Eigen's product, every transpose combination, on blocks with an outer
+// stride and with beta: the same sums in another order, 1e-14 relative.
+TEST(Gemm, IsEigensProductOnBlocksWithAndWithoutTransposes) {
+    const Matrix A = Matrix::Random(9, 7), B = Matrix::Random(7, 5), Bt = B.transpose();
+    const Matrix At = A.transpose();
+    for (const bool ta : {false, true})
+        for (const bool tb : {false, true}) {
+            Matrix big = Matrix::Random(12, 8);
+            const Matrix before = big;
+            const Matrix expected = A * B + 0.5 * before.block(2, 1, 9, 5);
+            gemm(ta ? At : A, ta, tb ? Bt : B, tb, 0.5, big.block(2, 1, 9, 5));
+            EXPECT_LT((big.block(2, 1, 9, 5) - expected).norm(), 1e-14 * expected.norm());
+            big.block(2, 1, 9, 5) = before.block(2, 1, 9, 5);
+            EXPECT_EQ(big, before);  // nothing written outside the block
+        }
+    Matrix out(8, 5);  // operands that are blocks with outer strides 9 and 7
+    gemm(A.block(1, 0, 8, 6), false, B.topRows(6), false, 0.0, out);
+    EXPECT_LT((out - A.block(1, 0, 8, 6) * B.topRows(6)).norm(), 1e-14 * out.norm());
+    test::expect_error([&] { gemm(A, false, A, false, 0.0, out); }, "gemm: 9x7 times 9x7 into 8x5");
+}
+
+}  // namespace
+}  // namespace coarsegrain::solve
