@@ -127,8 +127,8 @@ constexpr double kDenseCongruence = 0.5;
 /// The dense congruence holds M, X M^T and the result densely, and X too if it is dense enough
 /// (kSparseDensePenalty): at most this many entries in all (2.4 GB). The coarse step of three
 /// levels on 64x16x16 hexes after global solves (M = C̃^1 1275 x 8019, X = A^2 86% dense: 8.6e7
-/// entries, 0.7 GB) took 6.5 s instead of 49.7 s in the grouped kernel, within the 9.7 GB peak
-/// of that build.
+/// entries, 0.7 GB) took 1.5 s by BLAS (6.2-6.5 s by Eigen's dense product, 49.7 s in the
+/// grouped kernel), within the 6.8 GB peak of that run.
 constexpr double kDenseCongruenceMaxEntries = 3e8;
 
 /// Eigen's sparse times dense product costs about this many times more per multiply-add than

@@ -178,8 +178,8 @@
 ///
 /// The accordion beam at 64x16x16 (examples/accordion with 3 levels to 16x4x4: the fine step's
 /// coarse cells are half a layer wide; session 21, `coarsen --method mra-linear`, coarsest
-/// energy error): global solves 0.0111 (build 157 s, idle: the fine step's solves 61 s and its
-/// A^2 77 s); cell-wise rho = 2 fine rings with patch 2 at the fine step and global solves at the
+/// energy error): global solves 0.0111 (build 144 s, idle: the fine step's solves 52 s and its
+/// A^2 79 s); cell-wise rho = 2 fine rings with patch 2 at the fine step and global solves at the
 /// coarse one 0.159 (build 124 s on a loaded machine: cell solves 37 s, C̃ 12 s, A^2 16 s, and
 /// A^1 44 s, before the dense Galerkin product for a half-dense A^{k+1}). As in 2D, where two
 /// coarse cells per layer need rho = 8 to 16 fine rings (0.21 at rho = 2: "Why the accordion
