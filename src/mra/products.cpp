@@ -118,18 +118,21 @@ bool dense_product_pays(const SparseMatrix& X, const SparseMatrix& Y) {
                                            entries(X) * static_cast<double>(Y.cols());
 }
 
-/// congruence goes dense when at least this fraction of M's entries is stored: measured on
-/// the 24x12x12 hex checker (2 threads), the grouped product took A^1 = C̃ A^2 C̃^T in 0.72 s
-/// against 2.87 s dense with C̃ 17% dense (rho = 5 fine rings), and 0.28 s against 0.20 s with
-/// C̃ 92% dense (global solves at the coarse step of three levels).
-constexpr double kDenseCongruence = 0.5;
+/// congruence goes dense (BLAS) when at least this fraction of M's entries is stored. With
+/// Eigen's dense products (SSE only) the grouped kernel took A^1 = C̃ A^2 C̃^T of the 24x12x12
+/// hex checker in 0.72 s against 2.87 s dense with C̃ 17% dense (rho = 5 fine rings); BLAS's
+/// products are 5x faster (solve::gemm). With them, C̃ of global solves on Table 1's 40x20x20
+/// box (32% dense) took A^1 in 36.8 s against 80.6 s grouped (build 89.1 s against 137.8 s, peak
+/// 7.0 against 5.8 GB), and the fine step of three levels on 64x16x16 hexes (36%) 61.4 s
+/// against 78.6 s.
+constexpr double kDenseCongruence = 0.3;
 
-/// The dense congruence holds M, X M^T and the result densely, and X too if it is dense enough
-/// (kSparseDensePenalty): at most this many entries in all (2.4 GB). The coarse step of three
-/// levels on 64x16x16 hexes after global solves (M = C̃^1 1275 x 8019, X = A^2 86% dense: 8.6e7
-/// entries, 0.7 GB) took 1.5 s by BLAS (6.2-6.5 s by Eigen's dense product, 49.7 s in the
-/// grouped kernel), within the 6.8 GB peak of that run.
-constexpr double kDenseCongruenceMaxEntries = 3e8;
+/// The dense congruence holds M, the result and one block of X M^T densely, and X too if it is
+/// dense enough (kSparseDensePenalty): at most this many entries in all (4.8 GB). The coarse
+/// step of three levels on 64x16x16 hexes after global solves (M = C̃^1 1275 x 8019, X = A^2 86%
+/// dense: 7.6e7 entries) took 1.5 s (6.2-6.5 s by Eigen's dense product, 49.7 s in the grouped
+/// kernel); its fine step (M 8019 x 55488: 5.4e8 entries) fits too.
+constexpr double kDenseCongruenceMaxEntries = 6e8;
 
 /// Eigen's sparse times dense product costs about this many times more per multiply-add than
 /// BLAS's dense one: X (8019 square, banded) times an 8019 x 1275 dense matrix took 0.26 / 0.47 /
@@ -152,8 +155,8 @@ SparseMatrix dense_product(const SparseMatrix& X, const SparseMatrix& Y) {
 }
 
 /// X M^T for a sparse X and a dense M, by block columns in parallel (OpenMP).
-Matrix times_transpose(const SparseMatrix& X, const Matrix& M) {
-    const Index m = M.rows();
+Matrix times_transpose(const SparseMatrix& X, const Eigen::Ref<const Matrix>& M) {
+    const Index m = static_cast<Index>(M.rows());
     Matrix P(X.rows(), m);
 #pragma omp parallel for schedule(dynamic, 1) if (m > kDenseBlock)
     for (Index b = 0; b < m; b += kDenseBlock) {
@@ -164,26 +167,10 @@ Matrix times_transpose(const SparseMatrix& X, const Matrix& M) {
 }
 
 /// X M^T for dense X and M (BLAS).
-Matrix times_transpose(const Matrix& X, const Matrix& M) {
+Matrix times_transpose(const Matrix& X, const Eigen::Ref<const Matrix>& M) {
     Matrix P(X.rows(), M.rows());
     solve::gemm(X, false, M, true, 0.0, P);
     return P;
-}
-
-/// The lower triangle of M Y (M Y symmetric up to round-off), dense: the lower block columns by
-/// BLAS, about half the multiply-adds of M Y.
-SparseMatrix dense_lower_product(const Matrix& M, const Matrix& Y) {
-    const Index m = M.rows();
-    Matrix P = Matrix::Zero(m, m);
-    for (Index b = 0; b < m; b += kLowerBlock) {
-        const Index nb = std::min(kLowerBlock, m - b);
-        solve::gemm(M.bottomRows(m - b), false, Y.middleCols(b, nb), false, 0.0,
-                    P.block(b, b, m - b, nb));
-    }
-    for (Index j = 1; j < m; ++j) P.col(j).head(j).setZero();
-    SparseMatrix out = P.sparseView(0.0, 0.0);
-    out.makeCompressed();
-    return out;
 }
 
 /// Whether products with X are cheaper through a dense copy of X (kSparseDensePenalty).
@@ -191,18 +178,32 @@ bool dense_pays(const SparseMatrix& X) {
     return kSparseDensePenalty * static_cast<double>(X.nonZeros()) > entries(X);
 }
 
-/// The lower triangle of M X M^T, dense (congruence for at least half-dense M), X densely where
-/// that pays (dense_pays).
+/// The lower triangle of M X M^T, dense, by blocks J of kLowerBlock result columns: P[j:, J] =
+/// M[j:, :] (X M[J, :]^T) from the block's first column j on (BLAS), about half the multiply-adds
+/// of M X M^T. X densely where that pays (dense_pays).
 SparseMatrix dense_congruence(const SparseMatrix& M, const SparseMatrix& X) {
     const Matrix Md(M);
-    return dense_lower_product(
-        Md, dense_pays(X) ? times_transpose(Matrix(X), Md) : times_transpose(X, Md));
+    const Index m = static_cast<Index>(Md.rows());
+    const Matrix Xd = dense_pays(X) ? Matrix(X) : Matrix();
+    Matrix P = Matrix::Zero(m, m);
+    for (Index b = 0; b < m; b += kLowerBlock) {
+        const Index nb = std::min(kLowerBlock, m - b);
+        const Matrix Y = Xd.size() > 0 ? times_transpose(Xd, Md.middleRows(b, nb))
+                                       : times_transpose(X, Md.middleRows(b, nb));
+        solve::gemm(Md.bottomRows(m - b), false, Y, false, 0.0, P.block(b, b, m - b, nb));
+    }
+    for (Index j = 1; j < m; ++j) P.col(j).head(j).setZero();
+    SparseMatrix out = P.sparseView(0.0, 0.0);
+    out.makeCompressed();
+    return out;
 }
 
-/// Whether dense_congruence fits kDenseCongruenceMaxEntries.
+/// Whether dense_congruence fits kDenseCongruenceMaxEntries: M, the result, one block of X M^T
+/// and, where it pays, X.
 bool dense_congruence_fits(const SparseMatrix& M, const SparseMatrix& X) {
     const double m = static_cast<double>(M.rows()), n = static_cast<double>(M.cols());
-    return 2 * m * n + m * m + (dense_pays(X) ? n * n : 0) <= kDenseCongruenceMaxEntries;
+    return m * n + m * m + n * kLowerBlock + (dense_pays(X) ? n * n : 0) <=
+           kDenseCongruenceMaxEntries;
 }
 
 /// Grouped congruence: per thread, one map from keys (DOF indices) to dense rows of W values.

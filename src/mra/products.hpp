@@ -20,8 +20,8 @@ SparseMatrix symmetrized(const SparseMatrix& M);
 /// The lower triangle (diagonal included) of M X M^T for symmetric X (both triangles stored).
 ///
 /// `groups` partitions the rows of M (the columns of the result) into groups of rows with
-/// nearby supports, e.g. node_blocks of the coarse level. Unless M is at least half dense (then
-/// the product is dense, in parallel, X too if it is dense enough, up to 3e8 entries in all),
+/// nearby supports, e.g. node_blocks of the coarse level. Unless M is at least 30% dense (then
+/// the product is dense, by BLAS, X too if it is dense enough, up to 6e8 entries in all),
 /// each group J of at most kMaxGroup rows is done at once: (X M^T)[:, J] is accumulated densely
 /// over the union of the supports of M's rows J, then M (X M^T)[:, J], by M's columns at that union or, where at least half of the entries scanned meet
 /// it (dense-ish M, e.g. after global solves), by M's rows with each result row in registers.
@@ -30,7 +30,7 @@ SparseMatrix symmetrized(const SparseMatrix& M);
 /// fine rings, C̃ with 22M entries, A^1 36% dense, 2 threads) A^1 took 6.6 s and 1.4 GB peak,
 /// against 17.9 s and 2.2 GB for column-by-column Gustavson products, which stream C̃ from memory
 /// once per column of the result and hold X M^T. With global solves there (C̃ 132M entries, 32%
-/// dense, too large for the dense product) A^1 took 97.7 s by columns and 80.6 s with the rows.
+/// dense) A^1 took 97.7 s by columns, 80.6 s with the rows, and 36.8 s by the dense product.
 /// By columns, a run of consecutive columns with one pattern (a node's DOFs) is taken at once,
 /// so that each row of the accumulator is read and written once per run instead of once per
 /// column: 32^3 hexes, Dirac, rho = 5, A^1 4.9 s -> 4.35 s, and 3.46 s once the truncation kept

@@ -35,7 +35,7 @@ std::vector<IndexVector> consecutive_groups(Index rows) {
 // times dense product); M 5% dense the grouped one. Every kernel sums the same products in
 // another order: 1e-13 relative.
 TEST(MraCongruence, EveryKernelIsTheGalerkinProduct) {
-    const Index m = 200, n = 300;  // m above the dense kernels' 128-column blocks
+    const Index m = 600, n = 300;  // m above the dense kernel's 512-column blocks
     for (const double m_density : {0.6, 0.05})
         for (const double x_density : {0.5, 0.01}) {
             const SparseMatrix half = random_sparse(n, n, x_density / 2, 7);

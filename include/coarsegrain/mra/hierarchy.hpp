@@ -178,8 +178,8 @@
 ///
 /// The accordion beam at 64x16x16 (examples/accordion with 3 levels to 16x4x4: the fine step's
 /// coarse cells are half a layer wide; session 21, `coarsen --method mra-linear`, coarsest
-/// energy error): global solves 0.0111 (build 144 s, idle: the fine step's solves 52 s and its
-/// A^2 79 s); cell-wise rho = 2 fine rings with patch 2 at the fine step and global solves at the
+/// energy error): global solves 0.0111 (build 127 s, idle: the fine step's solves 53 s and its
+/// A^2 61 s); cell-wise rho = 2 fine rings with patch 2 at the fine step and global solves at the
 /// coarse one 0.159 (build 124 s on a loaded machine: cell solves 37 s, C̃ 12 s, A^2 16 s, and
 /// A^1 44 s, before the dense Galerkin product for a half-dense A^{k+1}). As in 2D, where two
 /// coarse cells per layer need rho = 8 to 16 fine rings (0.21 at rho = 2: "Why the accordion
@@ -440,9 +440,11 @@
 /// Global solves (the accurate default, radius inf) in the same setting: build 137.8 s
 /// (factorization of B and solves 55.7 s, A^1 80.6 s; 156.3 s with A^1 97.7 s before the
 /// product read dense-ish C̃ by rows), storage 1.97 GB (C̃ 132M entries, 32% dense; A^1 98%
-/// dense), peak 5.8 GB, coarsest error 0.1716 against 0.58 at rho = 5. C̃ is too large for the
-/// dense product (kDenseProductMaxEntries), and the grouped one streams it once per group of
-/// 24 rows: ~7 GFlop/s per core, bound by memory.
+/// dense), peak 5.8 GB, coarsest error 0.1716 against 0.58 at rho = 5. The grouped product
+/// streams C̃ once per group of 24 rows: ~7 GFlop/s per core, bound by memory. Session 21: the
+/// dense product by BLAS (detail::congruence from 30% density) builds it in 89.1 s (solves 50.2
+/// s, A^1 36.8 s), storage 1.64 GB (A^1's lower triangle with its exact zeros dropped), peak 7.0
+/// GB, same error.
 /// Growth with the grid (same setting, patch 1; nodes: build s, storage MB): (c) 1,377: 1.9,
 /// 22; 4,225: 9.6, 101; 9,537: 19.7, 284; 18,081: 39.7, 611; (d) 1.3, 5.9, 14.1, 29.1 s. From
 /// 4,225 to 18,081 nodes (4.3x) the build grows 4.9x, close to linear (small grids clip most
