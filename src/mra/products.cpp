@@ -184,12 +184,13 @@ bool dense_pays(const SparseMatrix& X) {
 SparseMatrix dense_congruence(const SparseMatrix& M, const SparseMatrix& X) {
     const Matrix Md(M);
     const Index m = static_cast<Index>(Md.rows());
-    const Matrix Xd = dense_pays(X) ? Matrix(X) : Matrix();
+    const bool dense_x = dense_pays(X);
+    const Matrix Xd = dense_x ? Matrix(X) : Matrix();
     Matrix P = Matrix::Zero(m, m);
     for (Index b = 0; b < m; b += kLowerBlock) {
         const Index nb = std::min(kLowerBlock, m - b);
-        const Matrix Y = Xd.size() > 0 ? times_transpose(Xd, Md.middleRows(b, nb))
-                                       : times_transpose(X, Md.middleRows(b, nb));
+        const Matrix Y = dense_x ? times_transpose(Xd, Md.middleRows(b, nb))
+                                 : times_transpose(X, Md.middleRows(b, nb));
         solve::gemm(Md.bottomRows(m - b), false, Y, false, 0.0, P.block(b, b, m - b, nb));
     }
     for (Index j = 1; j < m; ++j) P.col(j).head(j).setZero();

@@ -21,10 +21,11 @@ SparseMatrix symmetrized(const SparseMatrix& M);
 ///
 /// `groups` partitions the rows of M (the columns of the result) into groups of rows with
 /// nearby supports, e.g. node_blocks of the coarse level. Unless M is at least 30% dense (then
-/// the product is dense, by BLAS, X too if it is dense enough, up to 6e8 entries in all),
-/// each group J of at most kMaxGroup rows is done at once: (X M^T)[:, J] is accumulated densely
-/// over the union of the supports of M's rows J, then M (X M^T)[:, J], by M's columns at that union or, where at least half of the entries scanned meet
-/// it (dense-ish M, e.g. after global solves), by M's rows with each result row in registers.
+/// the product is dense, by BLAS, X too if it is dense enough, up to 6e8 entries in all), each
+/// group J of at most kMaxGroup rows is done at once: (X M^T)[:, J] is accumulated densely over
+/// the union of the supports of M's rows J, then M (X M^T)[:, J], by M's columns at that union
+/// or, where at least half of the entries scanned meet it (dense-ish M, e.g. after global
+/// solves), by M's rows with each result row in registers.
 /// Every column of M is read once per group instead of once per row of M, and the inner loops
 /// are dense |J|-wide multiply-adds: on a 40x20x20 hex grid after localized solves (rho = 5
 /// fine rings, C̃ with 22M entries, A^1 36% dense, 2 threads) A^1 took 6.6 s and 1.4 GB peak,

@@ -218,8 +218,8 @@
 ///
 /// So cell-wise rho = 5 with patch 2 is as accurate as global solves here (1.04x) in 38% of
 /// their time and 53% of their storage (58% and 63% of the global build with the dense Galerkin
-/// product of session 21, 89.1 s and 1.64 GB), and rho = 2 with patch 2 meets the 1.5x in 24 s;
-/// both are far from the paper's 15 s, and the Galerkin product A^1 with the wider C̃ is now a
+/// product of session 21, 89.1 s and 1.64 GB), and rho = 2 with patch 2 meets the 1.5x
+/// in 24 s; both are far from the paper's 15 s, and the Galerkin product A^1 with the wider C̃ is now a
 /// third of the build. A patch 2 on the homogeneous block at 16^3, rho = 3: error 0.0180
 /// against 0.0213 with patch 1, localized solves 2.4 s against 4.8 s, storage 143 against 124 MB.
 ///
