@@ -1,5 +1,6 @@
 #include "coarsegrain/scene/scene.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -369,16 +370,17 @@ std::vector<Eigen::VectorXd> probe_displacements(const Scene& scene, const mesh:
 }
 
 json demo_scene(double scale) {
-    // Multiples of 4 cells, so that the 3-level hierarchy's coarsest grid is whole.
-    const int nx = std::max(4, 4 * static_cast<int>(8 * scale));
-    const int ny = std::max(4, 4 * static_cast<int>(2 * scale));
+    // Cubic cells in multiples of 4, so that the 3-level hierarchy's coarsest grid is whole:
+    // 16b x 4b x 4b with b = round(3 scale), at least 1 (scale 1: 48x12x12).
+    const int b = std::max(1, static_cast<int>(std::lround(3 * scale)));
+    const int nx = 16 * b, ny = 4 * b;
     return json{
         {"description",
          "Accordion beam: a 4x1x1 block of alternating stiff (E = 1e7) and soft (E = 1e4) "
          "layers across its axis, clamped at x = 0 and hanging under gravity. Coarse: a tet grid "
          "with 4x coarser cells per axis (6 tets each) for the effective tensors and the "
          "baselines, and 3 levels of the material-adapted hierarchy (coarsest grid 4x coarser "
-         "per axis): the same 243 coarse DOFs at scale 1."},
+         "per axis): the same 624 coarse DOFs at scale 1."},
         {"dimension", 3},
         {"mesh",
          {{"grid",

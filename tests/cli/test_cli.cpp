@@ -13,6 +13,7 @@
 
 #include "cli/cli_test_util.hpp"
 #include "coarsegrain/io/vtu.hpp"
+#include "coarsegrain/scene/scene.hpp"
 
 using namespace coarsegrain;
 using nlohmann::json;
@@ -86,10 +87,25 @@ void expect_picture(const std::string& file) {
 
 }  // namespace
 
-// The README's first command at half the grid: every method, the table, the report.
+// --scale picks 16b x 4b x 4b cubic cells, b = round(3 S): whole coarse grids 4x coarser for
+// the 3 levels of the hierarchy and the effective tensors' tets.
+TEST(CliDemo, ScaleGivesCubicCellsInWholeCoarseGrids) {
+    const std::map<double, int> blocks = {{1.0, 3}, {2.0 / 3.0, 2}, {0.5, 2}, {1.0 / 3.0, 1},
+                                          {0.25, 1}};
+    for (const auto& [scale, b] : blocks) {
+        SCOPED_TRACE(scale);
+        const json d = scene::demo_scene(scale);
+        EXPECT_EQ(d["mesh"]["grid"]["cells"], json({16 * b, 4 * b, 4 * b}));
+        EXPECT_EQ(d["coarse"]["mesh"]["grid"]["cells"], json({4 * b, b, b}));
+        EXPECT_EQ(d["coarse"]["levels"], 3);
+        EXPECT_NO_THROW(scene::parse_scene(d, "demo", ""));
+    }
+}
+
+// The README's first command at a quarter of the grid: every method, the table, the report.
 TEST(CliDemoSlow, ComparesEveryMethodAndWritesTheReport) {
     const std::string dir = test::temp_dir("cli_demo");
-    const Result r = cli("demo --scale 0.5 --out " + dir);
+    const Result r = cli("demo --scale 0.25 --out " + dir);
     ASSERT_EQ(r.code, 0) << r.output;
     const json s = read_json(dir + "/summary.json");
     EXPECT_EQ(s["command"], "demo");

@@ -98,7 +98,8 @@ std::vector<Eigen::VectorXd> probe_displacements(const Scene& scene, const mesh:
                                                  const Vector& u);
 
 /// The built-in demo scene (a layered composite hung from one face under gravity) as JSON.
-/// @param[in] scale  1 for the full demo; smaller values shrink the grid (tests use 0.5)
+/// @param[in] scale  1 for the full demo (48x12x12 hexes); the grid is 16b x 4b x 4b with
+///                   b = round(3 scale), at least 1 (tests use 0.25: 16x4x4)
 nlohmann::json demo_scene(double scale = 1.0);
 
 }  // namespace coarsegrain::scene
