@@ -179,7 +179,8 @@
 /// The accordion beam at 64x16x16 (examples/accordion with 3 levels to 16x4x4: the fine step's
 /// coarse cells are half a layer wide; session 21, `coarsen --method mra-linear`, coarsest
 /// energy error): global solves 0.0111 (build 127 s, idle: the fine step's solves 53 s and its
-/// A^2 61 s); cell-wise rho = 2 fine rings with patch 2 at the fine step and global solves at the
+/// A^2 61 s; session 22, A^2 by columns of M X: 44.5 s, with the solves at 74 s that day, build
+/// 134 s); cell-wise rho = 2 fine rings with patch 2 at the fine step and global solves at the
 /// coarse one 0.159 (build 124 s on a loaded machine: cell solves 37 s, C̃ 12 s, A^2 16 s, and
 /// A^1 44 s, before the dense Galerkin product for a half-dense A^{k+1}). As in 2D, where two
 /// coarse cells per layer need rho = 8 to 16 fine rings (0.21 at rho = 2: "Why the accordion
@@ -231,6 +232,19 @@
 /// the global 0.0005; at 64x16 (two coarse cells per layer) 0.21 / 0.072 / 0.014 / 0.0015 against
 /// the global 0.0014. Node-wise without the correction at 64x16: 1.00 / 1.00 / 0.99 / 0.034 at
 /// rho = 2 / 4 / 8 / 16.
+///
+/// How far the accordion's basis functions reach (session 22; the demo beam at 48x12x12 hexes, 3
+/// levels, linear, node-wise at the fine step and global solves at the coarse one, invariance
+/// on, truncation 1e-7; coarsest energy error, global 0.0027 in a 16-18 s build): rho = 6 / 12
+/// fine rings 0.61 / 0.0031 (12.6 s for the fine step's solves, global 9 s). With regions
+/// spanning the whole cross-section and rho rings along the axis only (an experiment, not kept):
+/// rho = 2 / 4 / 8 / 12 give 0.92 / 0.44 / 0.039 / 0.0031 (`patch` 2 at rho = 8: 0.042). So the
+/// regions must span the cross-section (the stiff layers move as plates) and about one length
+/// unit along the axis, a quarter of this beam: at 80x20x20 hexes (107K DOFs) that is 20 fine
+/// rings, regions nearly as large as the grid. A beam four times as long (16x1x1 at 192x12x12,
+/// 98K DOFs, rho = 12) reached 0.0092 but built in 99 s (fine step's solves 41 s, A^2 19 s,
+/// the coarse step's global solves 20 s, A^1 11 s), and `patch` 2 with `patch_clip` at rho = 5
+/// on the 4x1x1 beam at 80x20x20 gave 0.99 (Dirac 0.85; naive averaging 0.92) in 40 / 24 s.
 ///
 /// ## Stiffness-weighted measurements (Options::measurement)
 /// Measurement::Stiffness weights the measurements of the finest step by the local stiffness
