@@ -104,7 +104,9 @@ int main(int argc, char** argv) {
         "the built-in scene, a layered beam (stiff/soft, contrast 1000) hung under gravity: fine\n"
         "solve, every coarsening method, a table and out/demo/report.md with pictures");
     demo->add_option("--out", demo_out, "output folder")->capture_default_str();
-    demo->add_option("--scale", demo_scale, "grid resolution factor: 1 = 48x12x12 hexes, 2/3 = 32x8x8, 1/3 = 16x4x4 (16b x 4b x 4b, b = round(3 S))")
+    demo->add_option("--scale", demo_scale,
+                     "grid resolution factor: 1 = 48x12x12 hexes, 0.67 = 32x8x8, 0.33 = 16x4x4\n"
+                     "(16b x 4b x 4b hexes, b = round(3 S))")
         ->check(CLI::Range(0.25, 1.0))
         ->capture_default_str();
 
