@@ -128,7 +128,7 @@ bool dense_product_pays(const SparseMatrix& X, const SparseMatrix& Y) {
 /// M (M X)^T being 3e12 multiply-adds).
 constexpr double kDenseCongruence = 0.3;
 
-/// The dense congruence holds M, the result and one block of X M^T densely, and X too if it is
+/// The dense congruence holds M, the result and one block M[J, :] X densely, and X too if it is
 /// dense enough (kSparseDensePenalty): at most this many entries in all (4.8 GB). The coarse
 /// step of three levels on 64x16x16 hexes after global solves (M = C̃^1 1275 x 8019, X = A^2 86%
 /// dense: 7.6e7 entries) took 1.5 s (6.2-6.5 s by Eigen's dense product, 49.7 s in the grouped
@@ -202,7 +202,7 @@ SparseMatrix dense_congruence(const SparseMatrix& M, const SparseMatrix& X) {
     return out;
 }
 
-/// Whether dense_congruence fits kDenseCongruenceMaxEntries: M, the result, one block of X M^T
+/// Whether dense_congruence fits kDenseCongruenceMaxEntries: M, the result, one block M[J, :] X
 /// and, where it pays, X.
 bool dense_congruence_fits(const SparseMatrix& M, const SparseMatrix& X) {
     const double m = static_cast<double>(M.rows()), n = static_cast<double>(M.cols());

@@ -31,8 +31,8 @@ std::vector<IndexVector> consecutive_groups(Index rows) {
     return groups;
 }
 
-// M 60% dense takes the dense kernel, with X dense (50%) or sparse (1%: X M^T by Eigen's sparse
-// times dense product); M 5% dense the grouped one. Every kernel sums the same products in
+// M 60% dense takes the dense kernel, with X dense (50%) or sparse (1%: M X by columns of X,
+// times_sparse); M 5% dense the grouped one. Every kernel sums the same products in
 // another order: 1e-13 relative.
 TEST(MraCongruence, EveryKernelIsTheGalerkinProduct) {
     const Index m = 600, n = 300;  // m above the dense kernel's 512-column blocks
