@@ -14,26 +14,10 @@
 
 #include "coarsegrain/coarsen/coarse_model.hpp"
 #include "coarsegrain/homogenize/effective_tensor.hpp"
+#include "coarsegrain/homogenize/options.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
 namespace coarsegrain::homogenize {
-
-/// The scene's "coarse" keys this module reads (values validated by parse_options).
-struct Options {
-    /// coarse.normals: "coarse" (default: the traction of Eq. 6 uses the normal of the nearest
-    /// coarse boundary facet, Sec. 4.2) or "fine" (the fine facet's own normal).
-    bool coarse_normals = true;
-    /// coarse.boundary: "neumann" (default, Eq. 6) or "mixed" (Sec. 3.8: the harmonic
-    /// displacements vanish on the scene's Dirichlet nodes; coarse elements whose mollifier is
-    /// then singular fall back to the pure-Neumann one).
-    bool mixed_boundary = false;
-    /// coarse.map: "barycentric" (default) or "harmonic": which coarse-to-fine map becomes
-    /// CoarseModel::to_fine (the harmonic one linearized, HarmonicMap::linearized). Only the
-    /// effective-tensor method has harmonic fields; the baselines always embed barycentrically.
-    /// With a mixed boundary where elements fell back, the map uses the pure-Neumann fields
-    /// (the mixed ones are singular on those elements).
-    bool harmonic_map = false;
-};
 
 /// Reads and validates coarse.normals, coarse.boundary and coarse.map.
 /// @throws InvalidScene naming coarse.<key> and the allowed values

@@ -43,18 +43,6 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source);
 /// applies Φ^{1,T} level by level (reconstruct) without forming Φ^1.
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, const Vector& f_fine);
 
-/// Options of compare_levels, read from the scene's "coarse" block (parse_compare_options).
-struct CompareOptions {
-    /// coarse.spectrum_max_dofs (integer >= 0): levels whose A^k or B^k has more rows get no
-    /// condition number. Each spectrum costs a factorization and tens of Lanczos solves:
-    /// measured 0.35 s for A of 20200 rows (2D 100x100 grid, 2 shared cores), more in 3D where
-    /// factorizations fill in.
-    Index max_spectrum_dofs = 20000;
-    /// coarse.cell_tensors (true | false): compute the Sec. 5.6 cell tensors. Each coarsest cell
-    /// gets its own free-body hierarchy, so a single coarsest cell costs a second full build.
-    bool cell_tensors = true;
-};
-
 /// @throws InvalidScene naming `coarse.<key>` and the source
 CompareOptions parse_compare_options(const nlohmann::json& coarse, const std::string& source);
 

@@ -535,115 +535,11 @@
 #include "coarsegrain/common/types.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
+#include "coarsegrain/mra/options.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 #include "coarsegrain/mra/run_matrix.hpp"
 
 namespace coarsegrain::mra {
-
-enum class DirichletTreatment { Eliminate, Penalty, DiagonalPenalty, Constrain, Ignore };
-
-/// Grid on which the localization radius rho counts rings (Sec. 3.5).
-enum class RadiusGrid {
-    Fine,    ///< rings of the finer grid of the step (level k+1): the region spans 2 rho + 1 nodes
-    Coarse,  ///< rings of the coarser grid (level k), the paper's wording: 4 rho + 1 fine nodes
-};
-
-/// How the solves for Z are localized when the radius is finite (Sec. 3.5).
-enum class Localization {
-    /// Per coarse node i (the paper): B[S_i, S_i] z_i = -R[S_i, i] on the wavelets S_i near i.
-    Node,
-    /// Per coarse cell T, as the correctors of Localized Orthogonal Decomposition (Malqvist and
-    /// Peterseim): R = sum_T R^T with R^T = W Φ^{k+1} A_T Φ^{k+1,T} C^{†,T}, A_T the fine
-    /// stiffness of the fine elements inside T (sum_T A_T = A^q); each R^T is solved on the
-    /// wavelets within rho rings of T and Z = sum_T Z^T. Needs the element materials. With the
-    /// linear refinement C^† is replaced by a sparse left inverse that reproduces rigid motions
-    /// (then the corrections of a rigid motion cancel cell by cell); see the table above.
-    Cell,
-};
-
-/// Measurement functions of the finest step (the rows of C^{q-1}; Sec. 3.2 with weights).
-enum class Measurement {
-    Canonical,  ///< the paper's: the canonical refinement itself
-    /// Stiffness-weighted (weighted_refinement; no effect on the Dirac refinement, whose
-    /// measurements are values at single nodes): each fine node's share
-    /// of a coarse measurement is scaled by its local stiffness, so that a coarse node measures
-    /// mainly the stiff material around it. Coarser steps compose these measurements with the
-    /// canonical C^k, so the hierarchy stays nested. See "Stiffness-weighted measurements".
-    Stiffness,
-};
-
-/// "dirac", "linear" / "eliminate", "penalty", "diagonal_penalty", "constrain", "ignore" / "fine",
-/// "coarse" / "node", "cell" / "canonical", "stiffness".
-std::string refinement_name(Refinement r);
-std::string dirichlet_name(DirichletTreatment t);
-std::string radius_grid_name(RadiusGrid g);
-std::string localization_name(Localization l);
-std::string measurement_name(Measurement m);
-
-/// Options of the hierarchy (Algorithm 1).
-struct Options {
-    /// Number of levels q >= 2 (the finest grid counts as one). Cells per axis of the fine grid
-    /// must be divisible by 2^(q-1).
-    int levels = 3;
-    Refinement refinement = Refinement::Linear;
-    /// Localization radius rho of step k (building level k from k+1) is radius[k-1], or
-    /// radius[0] for every step if radius has one entry. Infinity: global solves (one CHOLMOD
-    /// factorization of B^k for all columns of Z).
-    std::vector<double> radius = {std::numeric_limits<double>::infinity()};
-    RadiusGrid radius_grid = RadiusGrid::Fine;
-    /// Eq. 12 defect-driven radius (node localization, finite radii; 0: off). The localized
-    /// solves make C̃ A^{k+1} W^T = 0 (Eq. 12) hold only on each region's wavelets. With a
-    /// tolerance, each region starts at its step's radius and doubles it until the relative
-    /// defect of its rows, ||(C̃ A W^T)[r, :]|| / ||(C^† A W^T)[r, :]||, is at most the
-    /// tolerance, or the radius reaches max_radius, or the region covers the grid. See
-    /// "Defect-driven radius" above.
-    double defect_tolerance = 0;
-    /// Largest radius of the defect-driven growth (same grid as radius).
-    double max_radius = 16;
-    /// Patch-wise localization (finite radii only): coarse nodes per axis of a patch. The
-    /// nodes of a patch (a block of patch^dim coarse nodes) share one region, the fine nodes
-    /// within rho rings of any of them, and one factorization of B^k on it for all their
-    /// columns. 1: the paper's per-node regions. A larger patch enlarges every node's region
-    /// (at least as accurate as patch 1 with the same rho) and divides the number of
-    /// factorizations by patch^dim. With Localization::Cell, a block of patch^dim coarse cells
-    /// is one part T: one region (rho rings around the block) and one factorization for the
-    /// sum of its cells' right-hand sides.
-    int patch = 1;
-    /// With patch > 1, each node keeps from its patch's solution only the wavelets within its
-    /// own rho rings (zeroes the rest), so its basis function has the support of patch 1: C̃
-    /// and A^k as sparse as with patch 1, for patch^dim fewer factorizations. The clipped rows
-    /// no longer minimize the energy on their support; see "Clipped patches" above for what that
-    /// costs each refinement.
-    bool patch_clip = false;
-    /// Node- or cell-wise localization (finite radii only; Cell needs the Eliminate, Constrain
-    /// or Ignore treatment, whose fine operator is the sum of the element matrices, and no
-    /// patch_clip).
-    Localization localization = Localization::Node;
-    Measurement measurement = Measurement::Canonical;
-    /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, the d
-    /// entries of a row i of C̃ at the DOFs of one level-(k+1) node j (a row of the paper's d x d
-    /// coefficient C̃_ij) are dropped together if all of them are below tau max_l |C̃_il|
-    /// (relative to the largest coefficient of the same basis function). Dropping entries one
-    /// by one instead left a node's columns with different patterns: on 24^3 hexes (Dirac, rho
-    /// = 5) it dropped 1.0% of C̃'s entries against 0.03% by nodes, but C̃'s run storage took
-    /// 210.7 MB against 206.5 MB and A^1 1.75 s against 1.47 s (the grouped product takes a
-    /// node's columns at once only where they share a pattern). A^k = C̃^k A^{k+1} C̃^{k,T} is then
-    /// the exact Galerkin matrix of the truncated basis and is not truncated itself: dropping its
-    /// small entries perturbs its near-null space (measured on the 32x32 hung square after global
-    /// solves: tau = 1e-7 on A^k raised the coarsest error by 6%, tau = 1e-4 made A^1 indefinite).
-    /// Default 1e-7: C̃ of global solves 35-63% sparser at an unchanged error (see the table above).
-    double truncation = 1e-7;
-    /// Translation and rotation invariance correction of C̃ (Sec. 3.5), applied after truncation
-    /// so that it holds exactly.
-    bool invariance = true;
-    DirichletTreatment dirichlet = DirichletTreatment::Constrain;
-    /// Penalty / DiagonalPenalty magnitude (absolute, or relative to K_ii).
-    double penalty = 1e8;
-    /// Keep Φ^k and Ψ^k (against the finest grid) in every Level. Off by default: they hold
-    /// more entries than all C̃^k together (128x128 quads, 3 levels: 12 GB), and basis() and
-    /// reconstruct() give Φ^k and Φ^{k,T} u^k on demand from the C̃^k.
-    bool store_bases = false;
-};
 
 /// One level k < q of the hierarchy, built from level k+1 (Algorithm 1, lines 2-7).
 struct Level {

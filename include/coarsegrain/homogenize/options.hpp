@@ -1,0 +1,24 @@
+#pragma once
+/// @file Options of the effective-tensor coarsening and its baselines, apart from the method so
+/// that scene loading can validate them before any work.
+
+namespace coarsegrain::homogenize {
+
+/// The scene's "coarse" keys the effective-tensor method and its baselines read.
+struct Options {
+    /// coarse.normals: "coarse" (default: the traction of Eq. 6 uses the normal of the nearest
+    /// coarse boundary facet, Sec. 4.2) or "fine" (the fine facet's own normal).
+    bool coarse_normals = true;
+    /// coarse.boundary: "neumann" (default, Eq. 6) or "mixed" (Sec. 3.8: the harmonic
+    /// displacements vanish on the scene's Dirichlet nodes; coarse elements whose mollifier is
+    /// then singular fall back to the pure-Neumann one).
+    bool mixed_boundary = false;
+    /// coarse.map: "barycentric" (default) or "harmonic": which coarse-to-fine map becomes
+    /// CoarseModel::to_fine (the harmonic one linearized, HarmonicMap::linearized). Only the
+    /// effective-tensor method has harmonic fields; the baselines always embed barycentrically.
+    /// With a mixed boundary where elements fell back, the map uses the pure-Neumann fields
+    /// (the mixed ones are singular on those elements).
+    bool harmonic_map = false;
+};
+
+}  // namespace coarsegrain::homogenize
