@@ -55,11 +55,11 @@ void write_fine(FineRun& f, const fs::path& dir) {
 coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
                                            const solve::SolverOptions& options, Timings& timings) {
     Timings first;
-    coarsen::CoarseSolution s = coarsen::solve_static(model, options, &first);
+    coarsen::CoarseSolution s = coarsen::solve_coarse(model, options, &first);
     double factorize = first["factorize"], solve = first["solve"], total = factorize + solve;
     for (int repeat = 1; repeat < 5 && total < 0.1; ++repeat) {
         Timings t;
-        coarsen::solve_static(model, options, &t);
+        coarsen::solve_coarse(model, options, &t);
         factorize = std::min(factorize, t["factorize"]);
         solve = std::min(solve, t["solve"]);
         total += t["factorize"] + t["solve"];
@@ -255,6 +255,7 @@ void run_comparison(const scene::Scene& sc, const std::vector<std::string>& meth
 
 void run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
                  const std::string& out_dir, const std::string& command, double read_seconds) {
+    for (const std::string& method : methods) coarsen::validate_method(sc, method);
     io::ensure_writable_dir(out_dir);
     if (methods.size() == 1)
         run_one(sc, methods.front(), out_dir, read_seconds);

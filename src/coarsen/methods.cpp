@@ -2,13 +2,28 @@
 
 #include <algorithm>
 
-#include "../scene/json_reader.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/homogenize/homogenize.hpp"
 #include "coarsegrain/mra/coarse_model.hpp"
 
 namespace coarsegrain::coarsen {
+
+namespace {
+
+bool is_hierarchy(const std::string& method) { return method.starts_with("mra"); }
+
+/// The hierarchy options of an mra method: the scene's, with the variant's refinement and
+/// Dirichlet treatment.
+mra::Options hierarchy_options(const scene::Scene& scene, const std::string& method) {
+    mra::Options o = scene.coarse.mra;
+    if (method.starts_with("mra-linear")) o.refinement = mra::Refinement::Linear;
+    if (method.starts_with("mra-dirac")) o.refinement = mra::Refinement::Dirac;
+    if (method.ends_with("-blind")) o.dirichlet = mra::DirichletTreatment::Ignore;
+    return o;
+}
+
+}  // namespace
 
 const std::vector<std::string>& method_names() {
     static const std::vector<std::string> names = {
@@ -19,47 +34,55 @@ const std::vector<std::string>& method_names() {
 
 std::vector<std::string> configured_methods(const scene::Scene& scene) {
     std::vector<std::string> methods;
-    if (scene.coarse_mesh) methods = {"effective-tensor", "naive", "voigt", "reuss"};
-    if (scene.coarse.is_object() && scene.coarse.contains("levels")) {
+    if (scene.coarse.mesh) methods = {"effective-tensor", "naive", "voigt", "reuss"};
+    if (scene.coarse.hierarchy) {
         methods.push_back("mra-linear");
         methods.push_back("mra-dirac");
-        const scene::JsonReader r(scene.coarse, "coarse", scene.source);
-        if (auto v = r.find("boundary_blind")) {
-            v->fail_unless(v->json().is_boolean(), "expected true or false, got {}",
-                           v->json().dump());
-            if (v->json().get<bool>()) {
-                methods.push_back("mra-linear-blind");
-                methods.push_back("mra-dirac-blind");
-            }
+        if (scene.coarse.boundary_blind) {
+            methods.push_back("mra-linear-blind");
+            methods.push_back("mra-dirac-blind");
         }
     }
-    CG_VERIFY(!methods.empty(),
-              "{}: the \"coarse\" block configures no method: expected coarse.mesh "
-              "(effective-tensor, naive, voigt, reuss) or coarse.levels (mra)",
-              scene.source);
+    CG_VERIFY_AS(InvalidScene, !methods.empty(),
+                 "{}: the \"coarse\" block configures no method: expected coarse.mesh "
+                 "(effective-tensor, naive, voigt, reuss) or coarse.levels (mra)",
+                 scene.source);
     return methods;
+}
+
+void validate_method(const scene::Scene& scene, const std::string& method) {
+    CG_VERIFY(
+        std::find(method_names().begin(), method_names().end(), method) != method_names().end(),
+        "unknown method '{}': expected one of {}", method, fmt::join(method_names(), ", "));
+    if (!is_hierarchy(method)) {
+        CG_VERIFY_AS(InvalidScene, scene.coarse.mesh.has_value(),
+                     "{}: coarse.mesh: the {} method needs a coarse mesh", scene.source, method);
+        return;
+    }
+    CG_VERIFY_AS(InvalidScene, scene.mesh.grid.has_value(),
+                 "{}: mesh: the {} method needs a regular grid (mesh.grid); coarsen other meshes "
+                 "with coarse.mesh (effective-tensor)",
+                 scene.source, method);
+    try {
+        mra::validate_grid(hierarchy_options(scene, method), scene.mesh.grid->cells,
+                           scene.dimension);
+    } catch (const Error& e) {
+        CG_VERIFY_AS(InvalidScene, false, "{}: coarse.levels: {}", scene.source, e.what());
+    }
+    for (const scene::BoxCondition& c : scene.dirichlet)
+        CG_VERIFY_AS(InvalidScene, c.value.isZero(0.0),
+                     "{}: {}.value: the {} method supports only zero prescribed displacements, "
+                     "got [{}]",
+                     scene.source, c.key, method, fmt::join(c.value, ", "));
 }
 
 CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
                                const std::string& method) {
-    CG_VERIFY(
-        std::find(method_names().begin(), method_names().end(), method) != method_names().end(),
-        "unknown method '{}': expected one of {}", method, fmt::join(method_names(), ", "));
-    CoarseModel m;
-    if (method == "mra") {
-        m = mra::build_coarse_model(scene, fine);
-    } else if (method.starts_with("mra-")) {
-        scene::Scene variant = scene;
-        std::string refinement = method.substr(4);
-        if (refinement.ends_with("-blind")) {
-            variant.coarse["dirichlet"] = "ignore";
-            refinement.resize(refinement.size() - std::string_view("-blind").size());
-        }
-        variant.coarse["refinement"] = refinement;
-        m = mra::build_coarse_model(variant, fine);
-    } else {
-        m = homogenize::build_coarse_model(scene, fine, method);
-    }
+    validate_method(scene, method);
+    CoarseModel m = is_hierarchy(method)
+                        ? mra::build_coarse_model(hierarchy_options(scene, method),
+                                                  scene.coarse.mra_compare, fine)
+                        : homogenize::build_coarse_model(scene, fine, method);
     m.method = method;
     return m;
 }

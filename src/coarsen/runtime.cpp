@@ -50,23 +50,14 @@ double stress_error(const scene::FineModel& fine, const Vector& u, const Vector&
 
 }  // namespace
 
-CoarseSolution solve_static(const CoarseModel& model, const solve::SolverOptions& options,
+CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions& options,
                             Timings* timings) {
     const Index n = model.K.rows();
     CG_VERIFY(model.K.cols() == n && model.f.size() == n && model.to_fine.cols() == n,
               "coarse model {}: K is {}x{}, f has {} entries, to_fine has {} columns", model.method,
               model.K.rows(), model.K.cols(), model.f.size(), model.to_fine.cols());
-    const fem::ReducedSystem sys = fem::reduce(model.K, model.f, model.bc);
-    solve::SpdSolver solver(options);
-    {
-        const Phase phase("factorize", timings);
-        solver.compute(sys.K);
-    }
     CoarseSolution s;
-    {
-        const Phase phase("solve", timings);
-        s.u = fem::expand(sys, solver.solve(sys.rhs), model.bc, n);
-    }
+    s.u = fem::solve_static(model.K, model.f, model.bc, options, timings);
     s.u_fine = model.to_fine * s.u;
     return s;
 }

@@ -152,4 +152,16 @@ Vector expand(const ReducedSystem& sys, const Vector& u_free, const Dirichlet& b
     return u;
 }
 
+Vector solve_static(const SparseMatrix& K, const Vector& f, const Dirichlet& bc,
+                    const solve::SolverOptions& options, Timings* timings) {
+    const ReducedSystem sys = reduce(K, f, bc);
+    solve::SpdSolver solver(options);
+    {
+        const Phase phase("factorize", timings);
+        solver.compute(sys.K);
+    }
+    const Phase phase("solve", timings);
+    return expand(sys, solver.solve(sys.rhs), bc, K.rows());
+}
+
 }  // namespace coarsegrain::fem

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <optional>
 
-#include "../scene/json_reader.hpp"
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/loads.hpp"
 #include "coarsegrain/homogenize/coarse_maps.hpp"
@@ -18,17 +17,6 @@
 namespace coarsegrain::homogenize {
 
 namespace {
-
-/// A choice between two strings; returns true for `second`.
-bool parse_choice(const scene::JsonReader& r, const char* key, const char* first,
-                  const char* second) {
-    const auto v = r.find(key);
-    if (!v) return false;
-    const std::string s = v->string();
-    v->fail_unless(s == first || s == second, "unknown value \"{}\"; expected \"{}\" or \"{}\"", s,
-                   first, second);
-    return s == second;
-}
 
 std::string point_string(const Eigen::VectorXd& p) {
     return fmt::format("({:.4g})", fmt::join(p, ", "));
@@ -183,16 +171,6 @@ Vector element_measures(const mesh::Mesh& m) {
 
 }  // namespace
 
-Options parse_options(const scene::Scene& scene) {
-    Options o;
-    if (scene.coarse.is_null()) return o;
-    const scene::JsonReader r(scene.coarse, "coarse", scene.source);
-    o.coarse_normals = !parse_choice(r, "normals", "coarse", "fine");
-    o.mixed_boundary = parse_choice(r, "boundary", "neumann", "mixed");
-    o.harmonic_map = parse_choice(r, "map", "barycentric", "harmonic");
-    return o;
-}
-
 Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
                       const std::string& method) {
     const bool effective = method == "effective-tensor";
@@ -203,15 +181,15 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
                  method);
     Coarsening c;
     c.method = method;
-    c.options = parse_options(scene);
-    CG_VERIFY_AS(InvalidScene, scene.coarse_mesh.has_value(),
+    c.options = scene.coarse.homogenize;
+    CG_VERIFY_AS(InvalidScene, scene.coarse.mesh.has_value(),
                  "{}: coarse.mesh: the {} method needs a coarse mesh", scene.source, method);
     const int dim = fine.mesh.dim();
-    CG_VERIFY_AS(InvalidScene, scene.coarse_mesh->dim() == dim,
+    CG_VERIFY_AS(InvalidScene, scene.coarse.mesh->dim() == dim,
                  "{}: coarse.mesh is {}D, the fine mesh {}D", scene.source,
-                 scene.coarse_mesh->dim(), dim);
+                 scene.coarse.mesh->dim(), dim);
     const std::string where = scene.source + ": coarse.mesh";
-    mesh::Mesh coarse = *scene.coarse_mesh;
+    mesh::Mesh coarse = *scene.coarse.mesh;
     coarse.material_ids.setZero(coarse.num_elements());  // ignored: coarse elements get tensors
     mesh::validate(coarse, where);
     c.coarse = mesh::simplex_split(coarse);
@@ -349,24 +327,8 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
         m.K = fem::stiffness_matrix(c.coarse, mats);
         const SparseMatrix M = fem::mass_matrix(c.coarse, mats, fem::MassType::Lumped);
         m.mass = M.diagonal();
-        m.f = Vector::Zero(c.coarse.num_dofs());
-        if (scene.gravity.squaredNorm() > 0)
-            m.f += fem::gravity_load(c.coarse, mats, scene.gravity);
-        const mesh::Boundary cb = mesh::boundary(c.coarse);
-        for (const scene::BoxCondition& t : scene.traction) {
-            const std::vector<Index> facets =
-                mesh::facets_in_box(c.coarse, cb, t.box.min, t.box.max);
-            CG_VERIFY_AS(InvalidScene, !facets.empty(),
-                         "{}: {}.box selects no boundary {} of the coarse mesh", scene.source,
-                         t.key, dim == 3 ? "face" : "edge");
-            m.f += fem::traction_load(c.coarse, cb, facets, t.value);
-        }
-        for (const scene::BoxCondition& d : scene.dirichlet) {
-            const std::vector<Index> nodes = mesh::nodes_in_box(c.coarse, d.box.min, d.box.max);
-            CG_VERIFY_AS(InvalidScene, !nodes.empty(),
-                         "{}: {}.box selects no node of the coarse mesh", scene.source, d.key);
-            m.bc.fix_nodes(nodes, d.value);
-        }
+        m.f = scene::load_vector(scene, c.coarse, mats, mesh::boundary(c.coarse), "coarse mesh");
+        m.bc = scene::dirichlet_conditions(scene, c.coarse, "coarse mesh");
     }
     {
         const Phase phase("maps", &m.timings);

@@ -7,7 +7,6 @@
 #include <limits>
 #include <memory>
 
-#include "../scene/json_reader.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/mesh/grid.hpp"
@@ -21,17 +20,6 @@ using detail::cell_count;
 namespace {
 
 using Triplet = Eigen::Triplet<double, Index>;
-
-double parse_radius(const scene::JsonReader& r) {
-    if (r.json().is_string()) {
-        r.fail_unless(r.string() == "inf", "expected a number >= 1 or \"inf\", got {}",
-                      r.json().dump());
-        return std::numeric_limits<double>::infinity();
-    }
-    const double v = r.number();
-    r.fail_unless(v >= 1, "expected a number >= 1 or \"inf\", got {}", v);
-    return v;
-}
 
 /// Volume-weighted mean of the fine element stress of u over each coarsest cell (Mandel rows).
 Matrix cell_mean_stress(const scene::FineModel& fine, const Vector& u,
@@ -160,95 +148,6 @@ double density(const M& m, std::int64_t nonzeros) {
 
 }  // namespace
 
-Options parse_options(const nlohmann::json& coarse, const std::string& source) {
-    Options o;
-    if (coarse.is_null()) return o;
-    const scene::JsonReader r(coarse, "coarse", source);
-    r.require_object();
-    if (auto v = r.find("levels")) {
-        o.levels = v->integer();
-        v->fail_unless(o.levels >= 2, "expected an integer >= 2, got {}", o.levels);
-    }
-    if (auto v = r.find("refinement")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "dirac" || s == "linear",
-                       "expected \"dirac\" or \"linear\", got \"{}\"", s);
-        o.refinement = s == "dirac" ? Refinement::Dirac : Refinement::Linear;
-    }
-    if (auto v = r.find("radius")) {
-        if (v->json().is_array()) {
-            const std::size_t n = v->array_size();
-            v->fail_unless(static_cast<int>(n) == o.levels - 1,
-                           "expected levels - 1 = {} radii (one per step, coarsest first), got {}",
-                           o.levels - 1, n);
-            o.radius.clear();
-            for (std::size_t i = 0; i < n; ++i) o.radius.push_back(parse_radius(v->at(i)));
-        } else {
-            o.radius = {parse_radius(*v)};
-        }
-    }
-    if (auto v = r.find("radius_grid")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "fine" || s == "coarse", "expected \"fine\" or \"coarse\", got \"{}\"",
-                       s);
-        o.radius_grid = s == "fine" ? RadiusGrid::Fine : RadiusGrid::Coarse;
-    }
-    if (auto v = r.find("localization")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "node" || s == "cell", "expected \"node\" or \"cell\", got \"{}\"", s);
-        o.localization = s == "node" ? Localization::Node : Localization::Cell;
-    }
-    if (auto v = r.find("measurement")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "canonical" || s == "stiffness",
-                       "expected \"canonical\" or \"stiffness\", got \"{}\"", s);
-        o.measurement = s == "canonical" ? Measurement::Canonical : Measurement::Stiffness;
-    }
-    if (auto v = r.find("defect_tolerance")) {
-        o.defect_tolerance = v->number();
-        v->fail_unless(o.defect_tolerance >= 0 && std::isfinite(o.defect_tolerance),
-                       "expected a number >= 0 (0: fixed radius), got {}", o.defect_tolerance);
-    }
-    if (auto v = r.find("max_radius")) {
-        o.max_radius = v->number();
-        v->fail_unless(o.max_radius >= 1, "expected a number >= 1, got {}", o.max_radius);
-    }
-    if (auto v = r.find("patch")) {
-        o.patch = v->integer();
-        v->fail_unless(o.patch >= 1, "expected an integer >= 1, got {}", o.patch);
-    }
-    if (auto v = r.find("patch_clip")) {
-        v->fail_unless(v->json().is_boolean(), "expected true or false, got {}", v->json().dump());
-        o.patch_clip = v->json().get<bool>();
-    }
-    if (auto v = r.find("truncation")) {
-        o.truncation = v->number();
-        v->fail_unless(o.truncation >= 0 && o.truncation < 1, "expected a number in [0, 1), got {}",
-                       o.truncation);
-    }
-    if (auto v = r.find("invariance")) {
-        v->fail_unless(v->json().is_boolean(), "expected true or false, got {}", v->json().dump());
-        o.invariance = v->json().get<bool>();
-    }
-    if (auto v = r.find("dirichlet")) {
-        const std::string s = v->string();
-        bool found = false;
-        for (DirichletTreatment t :
-             {DirichletTreatment::Constrain, DirichletTreatment::Eliminate,
-              DirichletTreatment::Penalty, DirichletTreatment::DiagonalPenalty,
-              DirichletTreatment::Ignore})
-            if (dirichlet_name(t) == s) {
-                o.dirichlet = t;
-                found = true;
-            }
-        v->fail_unless(found,
-                       "expected \"constrain\", \"eliminate\", \"penalty\", "
-                       "\"diagonal_penalty\" or \"ignore\", got \"{}\"",
-                       s);
-    }
-    return o;
-}
-
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierarchy,
                                   const Vector& f_fine) {
     const Hierarchy& h = *hierarchy;
@@ -346,22 +245,6 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
     return m;
 }
 
-CompareOptions parse_compare_options(const nlohmann::json& coarse, const std::string& source) {
-    CompareOptions o;
-    if (coarse.is_null()) return o;
-    const scene::JsonReader r(coarse, "coarse", source);
-    if (auto v = r.find("spectrum_max_dofs")) {
-        o.max_spectrum_dofs = v->integer();
-        v->fail_unless(o.max_spectrum_dofs >= 0, "expected an integer >= 0, got {}",
-                       o.max_spectrum_dofs);
-    }
-    if (auto v = r.find("cell_tensors")) {
-        v->fail_unless(v->json().is_boolean(), "expected true or false, got {}", v->json().dump());
-        o.cell_tensors = v->json().get<bool>();
-    }
-    return o;
-}
-
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
                                        const nlohmann::json& build_levels,
                                        const CompareOptions& options) {
@@ -395,24 +278,13 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
     return c;
 }
 
-coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine) {
-    const Options options = parse_options(scene.coarse, scene.source);
-    const CompareOptions compare = parse_compare_options(scene.coarse, scene.source);
+coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOptions& compare,
+                                        const scene::FineModel& fine) {
     for (std::size_t k = 0; k < fine.bc.dofs.size(); ++k)
-        CG_VERIFY_AS(InvalidScene, fine.bc.values[static_cast<Index>(k)] == 0.0,
-                     "{}: dirichlet: the mra method supports only zero prescribed displacements, "
-                     "but DOF {} is prescribed {}",
-                     scene.source, fine.bc.dofs[k], fine.bc.values[static_cast<Index>(k)]);
-    CG_VERIFY_AS(InvalidScene, fine.mesh.grid.has_value(),
-                 "{}: mesh: the mra method needs a regular grid (mesh.grid)", scene.source);
-    const int dim = fine.mesh.dim();
-    const int factor = 1 << (options.levels - 1);
-    for (int d = 0; d < dim; ++d)
-        CG_VERIFY_AS(InvalidScene, fine.mesh.grid->cells[d] % factor == 0,
-                     "{}: coarse.levels: {} levels need cells per axis divisible by 2^{} = {}, "
-                     "but the grid has {} cells along axis {}",
-                     scene.source, options.levels, options.levels - 1, factor,
-                     fine.mesh.grid->cells[d], d);
+        CG_VERIFY(fine.bc.values[static_cast<Index>(k)] == 0.0,
+                  "mra: only zero prescribed displacements are supported, but DOF {} is "
+                  "prescribed {}",
+                  fine.bc.dofs[k], fine.bc.values[static_cast<Index>(k)]);
     const auto h = std::make_shared<const Hierarchy>(
         build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
     coarsen::CoarseModel m = coarse_model(h, fine.f);

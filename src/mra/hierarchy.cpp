@@ -159,34 +159,12 @@ Index symmetric_nonzeros(const SparseMatrix& lower) {
     return count;
 }
 
-Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
-                          const std::vector<Index>& fixed_dofs, const Options& options,
-                          const material::ElementMaterials* materials) {
-    CG_VERIFY(mesh.grid.has_value(),
-              "mra: the fine mesh must be a regular grid (mesh.grid), the material-adapted "
-              "hierarchy is built on nested grids");
-    const int dim = mesh.dim();
-    const int q = options.levels;
-    CG_VERIFY(q >= 2, "mra: levels = {} must be at least 2", q);
-    const Eigen::Vector3i cells = mesh.grid->cells;
-    for (int d = 0; d < dim; ++d)
-        CG_VERIFY(cells[d] % (1 << (q - 1)) == 0,
-                  "mra: {} levels need cells per axis divisible by 2^{} = {}, but axis {} has {} "
-                  "cells",
-                  q, q - 1, 1 << (q - 1), d, cells[d]);
-    CG_VERIFY(grid_nodes(cells, dim) == mesh.num_nodes(), "mra: the mesh has {} nodes, its grid {}",
-              mesh.num_nodes(), grid_nodes(cells, dim));
-    const Index n_dofs = mesh.num_dofs();
-    CG_VERIFY(K.rows() == n_dofs && K.cols() == n_dofs, "mra: K is {}x{}, the mesh has {} DOFs",
-              K.rows(), K.cols(), n_dofs);
-    // Checked once here: the localized solves factorize submatrices without input checks.
-    for (Index j = 0; j < K.outerSize(); ++j)
-        for (SparseMatrix::InnerIterator it(K, j); it; ++it)
-            CG_VERIFY(std::isfinite(it.value()), "mra: K({}, {}) = {} is not finite", it.row(), j,
-                      it.value());
-    CG_VERIFY(options.radius.size() == 1 || static_cast<int>(options.radius.size()) == q - 1,
+void validate(const Options& options) {
+    CG_VERIFY(options.levels >= 2 && options.levels <= kMaxLevels,
+              "mra: levels = {} must be in 2..{}", options.levels, kMaxLevels);
+    CG_VERIFY(options.radius.size() == 1 || static_cast<int>(options.radius.size()) == options.levels - 1,
               "mra: radius has {} entries, expected 1 or levels - 1 = {}", options.radius.size(),
-              q - 1);
+              options.levels - 1);
     for (const double r : options.radius)
         CG_VERIFY(r >= 1, "mra: radius {} must be at least 1 (or infinity)", r);
     CG_VERIFY(options.patch >= 1, "mra: patch = {} must be at least 1", options.patch);
@@ -194,8 +172,6 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                          std::any_of(options.radius.begin(), options.radius.end(),
                                      [](double r) { return !std::isinf(r); });
     if (by_cell) {
-        CG_VERIFY(materials != nullptr,
-                  "mra: cell localization needs the element materials (build_hierarchy argument)");
         CG_VERIFY(options.patch == 1 || !options.patch_clip,
                   "mra: cell localization does not clip patches (patch_clip): each cell's share "
                   "of the right-hand side is solved on its whole patch");
@@ -217,6 +193,43 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
               "per-node defect)");
     CG_VERIFY(options.max_radius >= 1, "mra: max_radius = {} must be at least 1",
               options.max_radius);
+}
+
+void validate_grid(const Options& options, const Eigen::Vector3i& cells, int dim) {
+    const int factor = 1 << (options.levels - 1);
+    for (int d = 0; d < dim; ++d)
+        CG_VERIFY(cells[d] % factor == 0,
+                  "mra: {} levels need cells per axis divisible by 2^{} = {}, but axis {} has {} "
+                  "cells",
+                  options.levels, options.levels - 1, factor, d, cells[d]);
+}
+
+Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
+                          const std::vector<Index>& fixed_dofs, const Options& options,
+                          const material::ElementMaterials* materials) {
+    CG_VERIFY(mesh.grid.has_value(),
+              "mra: the fine mesh must be a regular grid (mesh.grid), the material-adapted "
+              "hierarchy is built on nested grids");
+    const int dim = mesh.dim();
+    const int q = options.levels;
+    validate(options);
+    const Eigen::Vector3i cells = mesh.grid->cells;
+    validate_grid(options, cells, dim);
+    CG_VERIFY(grid_nodes(cells, dim) == mesh.num_nodes(), "mra: the mesh has {} nodes, its grid {}",
+              mesh.num_nodes(), grid_nodes(cells, dim));
+    const Index n_dofs = mesh.num_dofs();
+    CG_VERIFY(K.rows() == n_dofs && K.cols() == n_dofs, "mra: K is {}x{}, the mesh has {} DOFs",
+              K.rows(), K.cols(), n_dofs);
+    // Checked once here: the localized solves factorize submatrices without input checks.
+    for (Index j = 0; j < K.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(K, j); it; ++it)
+            CG_VERIFY(std::isfinite(it.value()), "mra: K({}, {}) = {} is not finite", it.row(), j,
+                      it.value());
+    const bool by_cell = options.localization == Localization::Cell &&
+                         std::any_of(options.radius.begin(), options.radius.end(),
+                                     [](double r) { return !std::isinf(r); });
+    CG_VERIFY(!by_cell || materials != nullptr,
+              "mra: cell localization needs the element materials (build_hierarchy argument)");
 
     Hierarchy h;
     h.dim = dim;

@@ -1,6 +1,8 @@
 #pragma once
 // Typed, validating access to a JSON value that remembers its key path for error messages.
+#include <cstdint>
 #include <initializer_list>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -66,9 +68,24 @@ public:
         fail_unless(v > 0, "expected a positive number, got {}", v);
         return v;
     }
-    int integer() const {
+    /// An integer in [lo, hi] (JSON integers are 64-bit; nothing is narrowed silently).
+    std::int64_t integer(std::int64_t lo, std::int64_t hi) const {
         fail_unless(m_j.is_number_integer(), "expected an integer, got {}", m_j.dump());
-        return m_j.get<int>();
+        constexpr auto kMax = static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max());
+        const bool fits = !m_j.is_number_unsigned() || m_j.get<std::uint64_t>() <= kMax;
+        const std::int64_t v = fits ? m_j.get<std::int64_t>() : 0;
+        fail_unless(fits && v >= lo && v <= hi, "expected an integer in [{}, {}], got {}", lo, hi,
+                    m_j.dump());
+        return v;
+    }
+    /// An integer that fits an int.
+    int integer() const {
+        return static_cast<int>(integer(std::numeric_limits<int>::min(),
+                                        std::numeric_limits<int>::max()));
+    }
+    bool boolean() const {
+        fail_unless(m_j.is_boolean(), "expected true or false, got {}", m_j.dump());
+        return m_j.get<bool>();
     }
     std::string string() const {
         fail_unless(m_j.is_string(), "expected a string, got {}", m_j.dump());

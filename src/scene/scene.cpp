@@ -1,8 +1,13 @@
 #include "coarsegrain/scene/scene.hpp"
 
+#include <fmt/ranges.h>
+#include <unistd.h>
+
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/loads.hpp"
@@ -27,6 +32,55 @@ std::string resolve(const std::string& base_dir, const std::string& file) {
     return p.is_absolute() || base_dir.empty() ? file : (fs::path(base_dir) / p).string();
 }
 
+/// Cells per axis of a grid (mesh.grid.cells, coarse.mesh.grid.cells).
+constexpr std::int64_t kMaxGridCells = 100000;
+
+/// Stiffness nonzeros per DOF of a grid's element type (node neighbours times dim): 27 nodes
+/// share an element with an interior hex node, 9 with a quad node; an interior node of the
+/// 6-tet split of a cube touches 15 nodes, of the 2-triangle split of a square 7.
+int grid_nonzeros_per_dof(mesh::ElementType type) {
+    switch (type) {
+        case mesh::ElementType::Hex8: return 27 * 3;
+        case mesh::ElementType::Tet4: return 15 * 3;
+        case mesh::ElementType::Quad4: return 9 * 2;
+        default: return 7 * 2;
+    }
+}
+
+/// Physical memory of this machine in bytes (0 if unknown).
+double physical_memory() {
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 0.0;
+}
+
+/// Fails (naming `r`'s key) unless a model of `nodes` nodes has a DOF count that fits the
+/// 32-bit indices of the sparse matrices and CHOLMOD, and its stiffness matrix (12 bytes per
+/// nonzero: value and row index) fits in this machine's memory. Computed in 64-bit before any
+/// array is allocated.
+void check_model_size(const JsonReader& r, std::int64_t nodes, int dim, int nonzeros_per_dof) {
+    const std::int64_t dofs = nodes * dim;
+    r.fail_unless(dofs <= std::numeric_limits<Index>::max(),
+                  "{} nodes make {} DOFs, more than the {} that 32-bit indices hold", nodes, dofs,
+                  std::numeric_limits<Index>::max());
+    const double bytes = 12.0 * static_cast<double>(dofs) * nonzeros_per_dof;
+    const double memory = physical_memory();
+    r.fail_unless(memory == 0 || bytes <= memory,
+                  "{} nodes ({} DOFs): the stiffness matrix alone needs about {:.1f} GB, more than "
+                  "this machine's {:.1f} GB",
+                  nodes, dofs, bytes / 1e9, memory / 1e9);
+}
+
+/// The path of an existing regular file (not a folder, device or FIFO), resolved against
+/// base_dir; fails naming `r`'s key.
+std::string regular_file(const JsonReader& r, const std::string& base_dir) {
+    const std::string path = resolve(base_dir, r.string());
+    std::error_code ec;
+    const fs::file_status status = fs::status(path, ec);
+    r.fail_unless(fs::exists(status), "file {} does not exist", path);
+    r.fail_unless(fs::is_regular_file(status), "{} is not a regular file", path);
+    return path;
+}
+
 mesh::ElementType parse_element(const JsonReader& r) {
     const std::string s = r.string();
     if (s == "hex") return mesh::ElementType::Hex8;
@@ -44,8 +98,7 @@ mesh::Mesh parse_mesh(const JsonReader& r, const std::optional<int>& dimension,
     r.allow_only({"file", "grid"});
     r.fail_unless(r.has("file") != r.has("grid"), "expected exactly one of \"file\" or \"grid\"");
     if (auto file = r.find("file")) {
-        const std::string path = resolve(base_dir, file->string());
-        file->fail_unless(fs::exists(path), "mesh file {} does not exist", path);
+        const std::string path = regular_file(*file, base_dir);
         if (!carried || fs::path(path).extension() != ".vtu") return io::read_mesh(path);
         auto [m, fields] = io::read_vtu(path);
         if (io::has_element_material_fields(fields, m.dim())) {
@@ -72,10 +125,12 @@ mesh::Mesh parse_mesh(const JsonReader& r, const std::optional<int>& dimension,
     const JsonReader c = g.at("cells");
     c.fail_unless(c.array_size() == static_cast<std::size_t>(dim), "expected {} integers", dim);
     Eigen::VectorXi cells(dim);
+    std::int64_t nodes = 1;
     for (int d = 0; d < dim; ++d) {
-        cells[d] = c.at(static_cast<std::size_t>(d)).integer();
-        c.fail_unless(cells[d] >= 1 && cells[d] <= 100000, "cell counts must be in 1..100000");
+        cells[d] = static_cast<int>(c.at(static_cast<std::size_t>(d)).integer(1, kMaxGridCells));
+        nodes *= cells[d] + 1;  // at most (1e5 + 1)^3 < 2^63
     }
+    check_model_size(c, nodes, dim, grid_nonzeros_per_dof(type));
     for (int d = 0; d < dim; ++d)
         g.fail_unless(hi[d] > lo[d], "max[{}] = {} must exceed min[{}] = {}", d, hi[d], d, lo[d]);
     return mesh::make_grid(type, lo, hi, cells);
@@ -161,7 +216,7 @@ std::map<int, material::Material> apply_material_field(const JsonReader& r, mesh
         im->allow_only({"file", "E_black", "E_white", "nu", "density"});
         im->fail_unless(dim == 2, "image material fields need a 2D mesh");
         material::ImageField opt;
-        opt.file = resolve(base_dir, im->at("file").string());
+        opt.file = regular_file(im->at("file"), base_dir);
         opt.E_black = im->at("E_black").positive();
         opt.E_white = im->at("E_white").positive();
         opt.nu = im->at("nu").number();
@@ -174,11 +229,22 @@ std::map<int, material::Material> apply_material_field(const JsonReader& r, mesh
         const JsonReader d = v->at("dims");
         d.fail_unless(d.array_size() == 3, "expected 3 integers");
         Eigen::Vector3i dims;
-        for (int k = 0; k < 3; ++k) {
-            dims[k] = d.at(static_cast<std::size_t>(k)).integer();
-            d.fail_unless(dims[k] >= 1, "voxel counts must be at least 1");
+        for (int k = 0; k < 3; ++k)
+            dims[k] = static_cast<int>(d.at(static_cast<std::size_t>(k)).integer(1, 1 << 20));
+        const JsonReader file = v->at("file");
+        const std::string path = regular_file(file, base_dir);
+        const std::uintmax_t bytes = fs::file_size(path);
+        const std::uintmax_t expected = static_cast<std::uintmax_t>(dims[0]) *
+                                        static_cast<std::uintmax_t>(dims[1]) *
+                                        static_cast<std::uintmax_t>(dims[2]);
+        file.fail_unless(bytes == expected,
+                         "{} has {} bytes, expected {}x{}x{} = {} (one byte per voxel)", path,
+                         bytes, dims[0], dims[1], dims[2], expected);
+        try {
+            material::voxel_field(m, path, dims);
+        } catch (const Error& e) {
+            file.fail("{}", e.what());
         }
-        material::voxel_field(m, resolve(base_dir, v->at("file").string()), dims);
     }
     return {};
 }
@@ -214,16 +280,27 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     root.require_object();
     root.allow_only({"description", "dimension", "mesh", "materials", "material_field", "plane",
                      "dirichlet", "loads", "probes", "solver", "coarse"});
+    // Everything that needs no mesh first, so that a bad option fails before a mesh is read.
     std::optional<int> dimension;
-    if (auto d = root.find("dimension")) {
-        dimension = d->integer();
-        d->fail_unless(*dimension == 2 || *dimension == 3, "expected 2 or 3, got {}", *dimension);
-    }
+    if (auto d = root.find("dimension")) dimension = static_cast<int>(d->integer(2, 3));
     if (auto p = root.find("plane")) {
         const std::string mode = p->string();
         p->fail_unless(mode == "strain" || mode == "stress", "expected \"strain\" or \"stress\"");
         s.plane = mode == "strain" ? material::PlaneMode::Strain : material::PlaneMode::Stress;
     }
+    if (auto sv = root.find("solver")) {
+        sv->allow_only({"backend", "tolerance"});
+        if (auto b = sv->find("backend")) {
+            try {
+                s.solver.backend = solve::parse_backend(b->string());
+            } catch (const Error& e) {
+                b->fail("{}", e.what());
+            }
+        }
+        if (auto t = sv->find("tolerance")) s.solver.cg_tolerance = t->positive();
+    }
+    if (auto c = root.find("coarse")) s.coarse = parse_coarse_options(c->json(), s.source);
+
     std::map<int, material::Material> carried;
     s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir, &carried);
     s.dimension = s.mesh.dim();
@@ -242,19 +319,26 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     if (auto m = root.find("materials")) {
         m->require_object();
         for (const auto& [key, value] : m->json().items()) {
-            int id = 0;
-            std::size_t used = 0;
-            try {
-                id = std::stoi(key, &used);
-            } catch (const std::exception&) {
-                used = 0;
-            }
             const JsonReader entry = m->at(key);
-            entry.fail_unless(used == key.size(), "material keys must be integer ids");
+            int id = 0;
+            const auto [end, ec] = std::from_chars(key.data(), key.data() + key.size(), id);
+            entry.fail_unless(ec == std::errc() && end == key.data() + key.size() &&
+                                  std::to_string(id) == key,
+                              "material keys must be integer ids written without sign or "
+                              "leading zeros (\"1\", not \"01\" or \"+1\")");
             s.materials[id] = parse_material(entry, dim, s.plane);
         }
     }
     root.fail_unless(!s.materials.empty(), "no materials: give \"materials\" or an image field");
+    if (auto p = root.find("plane")) {
+        p->fail_unless(dim == 2, "applies to 2D scenes only; this one is 3D");
+        for (const auto& [id, mat] : s.materials)
+            p->fail_unless(!std::isnan(mat.nu),
+                           "applies to isotropic materials (E, nu) only, but material {} is "
+                           "anisotropic: a 2D C_voigt / C_mandel is already the in-plane tensor; "
+                           "remove \"plane\"",
+                           id);
+    }
 
     if (auto d = root.find("dirichlet")) s.dirichlet = parse_box_conditions(*d, dim, false);
     s.gravity = Eigen::VectorXd::Zero(dim);
@@ -265,41 +349,96 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     }
     if (auto p = root.find("probes"))
         for (std::size_t i = 0; i < p->array_size(); ++i) s.probes.push_back(p->at(i).vector(dim));
-    if (auto sv = root.find("solver")) {
-        sv->allow_only({"backend", "tolerance"});
-        if (auto b = sv->find("backend")) {
-            try {
-                s.solver.backend = solve::parse_backend(b->string());
-            } catch (const Error& e) {
-                b->fail("{}", e.what());
-            }
-        }
-        if (auto t = sv->find("tolerance")) s.solver.cg_tolerance = t->positive();
-    }
-    if (auto c = root.find("coarse")) {
-        // One list for every method, so a scene can be coarsened by each of them; each method
-        // validates the values of its own keys (docs/guide.md "coarse").
-        c->allow_only(kCoarseKeys);
-        s.coarse = c->json();
-        if (auto m = c->find("mesh")) {
-            s.coarse_mesh = parse_mesh(*m, dim, base_dir);
-            m->fail_unless(s.coarse_mesh->dim() == dim, "the coarse mesh is {}D, the scene {}D",
-                           s.coarse_mesh->dim(), dim);
-        }
+    if (auto c = root.find("coarse"); c && c->has("mesh")) {
+        const JsonReader m = c->at("mesh");
+        s.coarse.mesh = parse_mesh(m, dim, base_dir);
+        m.fail_unless(s.coarse.mesh->dim() == dim, "the coarse mesh is {}D, the scene {}D",
+                      s.coarse.mesh->dim(), dim);
     }
     return s;
 }
 
-Scene load_scene(const std::string& file) {
-    std::ifstream in(file);
-    CG_VERIFY_AS(InvalidScene, in.good(), "cannot open scene file {}", file);
-    json j;
+json parse_json(std::string_view text, const std::string& source) {
+    // The parser reports each key as it reads it; a stack of the open objects' keys and the open
+    // arrays' indices finds repeated keys and names their path.
+    struct Open {
+        bool object = true;
+        std::set<std::string> keys;
+        std::string key;
+        std::size_t index = 0;
+    };
+    std::vector<Open> open;
+    const auto path = [&open](const std::string& last) {
+        std::string p;
+        for (std::size_t i = 0; i + 1 < open.size(); ++i)
+            p += open[i].object ? (p.empty() ? "" : ".") + open[i].key
+                                : fmt::format("[{}]", open[i].index);
+        return p.empty() ? last : p + "." + last;
+    };
+    const auto element_done = [&open] {
+        if (!open.empty() && !open.back().object) ++open.back().index;
+    };
+    const json::parser_callback_t callback = [&](int, json::parse_event_t event, json& parsed) {
+        using E = json::parse_event_t;
+        if (event == E::object_start) open.push_back({});
+        if (event == E::array_start) open.push_back({false, {}, {}, 0});
+        if (event == E::key) {
+            const std::string key = parsed.get<std::string>();
+            CG_VERIFY_AS(InvalidScene, open.back().keys.insert(key).second,
+                         "{}: {}: the key is given twice (the later one would silently win)",
+                         source, path(key));
+            open.back().key = key;
+        }
+        if (event == E::object_end || event == E::array_end) {
+            open.pop_back();
+            element_done();
+        }
+        if (event == E::value) element_done();
+        return true;
+    };
     try {
-        j = json::parse(in);
-    } catch (const json::parse_error& e) {
-        CG_VERIFY_AS(InvalidScene, false, "{}: not valid JSON: {}", file, e.what());
+        return json::parse(text.begin(), text.end(), callback);
+    } catch (const json::exception& e) {
+        // parse_error for syntax, out_of_range for numbers beyond double range (1e400)
+        CG_VERIFY_AS(InvalidScene, false, "{}: not valid JSON: {}", source, e.what());
     }
-    return parse_scene(j, file, fs::path(file).parent_path().string());
+}
+
+Scene load_scene(const std::string& file) {
+    std::error_code ec;
+    CG_VERIFY_AS(InvalidScene, fs::is_regular_file(file, ec),
+                 "cannot open scene file {}: {}", file,
+                 fs::exists(file, ec) ? "not a regular file" : "no such file");
+    std::ifstream in(file, std::ios::binary);
+    CG_VERIFY_AS(InvalidScene, in.good(), "cannot open scene file {}", file);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return parse_scene(parse_json(text, file), file, fs::path(file).parent_path().string());
+}
+
+fem::Dirichlet dirichlet_conditions(const Scene& scene, const mesh::Mesh& mesh,
+                                    const std::string& what) {
+    fem::Dirichlet bc;
+    for (const BoxCondition& c : scene.dirichlet) {
+        const std::vector<Index> nodes = mesh::nodes_in_box(mesh, c.box.min, c.box.max);
+        CG_VERIFY_AS(InvalidScene, !nodes.empty(), "{}: {}.box selects no node of the {}",
+                     scene.source, c.key, what);
+        bc.fix_nodes(nodes, c.value);
+    }
+    return bc;
+}
+
+Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
+                   const material::ElementMaterials& materials, const mesh::Boundary& boundary,
+                   const std::string& what) {
+    Vector f = Vector::Zero(mesh.num_dofs());
+    if (scene.gravity.squaredNorm() > 0) f += fem::gravity_load(mesh, materials, scene.gravity);
+    for (const BoxCondition& c : scene.traction) {
+        const std::vector<Index> facets = mesh::facets_in_box(mesh, boundary, c.box.min, c.box.max);
+        CG_VERIFY_AS(InvalidScene, !facets.empty(), "{}: {}.box selects no boundary {} of the {}",
+                     scene.source, c.key, mesh.dim() == 3 ? "face" : "edge", what);
+        f += fem::traction_load(mesh, boundary, facets, c.value);
+    }
+    return f;
 }
 
 FineModel build_fine_model(const Scene& scene, Timings* timings) {
@@ -313,44 +452,19 @@ FineModel build_fine_model(const Scene& scene, Timings* timings) {
             CG_VERIFY_AS(InvalidScene, false, "{}: materials: {}", scene.source, e.what());
         }
         m.boundary = mesh::boundary(m.mesh);
-        for (const BoxCondition& c : scene.dirichlet) {
-            const std::vector<Index> nodes = mesh::nodes_in_box(m.mesh, c.box.min, c.box.max);
-            CG_VERIFY_AS(InvalidScene, !nodes.empty(), "{}: {}.box selects no node of the mesh",
-                         scene.source, c.key);
-            m.bc.fix_nodes(nodes, c.value);
-        }
+        m.bc = dirichlet_conditions(scene, m.mesh, "mesh");
         m.K = fem::stiffness_matrix(m.mesh, m.materials);
-        m.f = Vector::Zero(m.mesh.num_dofs());
-        if (scene.gravity.squaredNorm() > 0)
-            m.f += fem::gravity_load(m.mesh, m.materials, scene.gravity);
-        for (const BoxCondition& c : scene.traction) {
-            const std::vector<Index> facets =
-                mesh::facets_in_box(m.mesh, m.boundary, c.box.min, c.box.max);
-            CG_VERIFY_AS(InvalidScene, !facets.empty(),
-                         "{}: {}.box selects no boundary {} of the mesh", scene.source, c.key,
-                         m.mesh.dim() == 3 ? "face" : "edge");
-            m.f += fem::traction_load(m.mesh, m.boundary, facets, c.value);
-        }
+        m.f = load_vector(scene, m.mesh, m.materials, m.boundary, "mesh");
     }
     return m;
 }
 
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
                             Timings* timings) {
-    const fem::ReducedSystem sys = fem::reduce(model.K, model.f, model.bc);
     solve::SolverOptions node_options = options;
     node_options.node_dofs = model.mesh.dim();  // K is interleaved per node
-    solve::SpdSolver solver(node_options);
-    {
-        const Phase phase("factorize", timings);
-        solver.compute(sys.K);
-    }
     StaticSolution s;
-    {
-        const Phase phase("solve", timings);
-        const Vector u_free = solver.solve(sys.rhs);
-        s.u = fem::expand(sys, u_free, model.bc, model.mesh.num_dofs());
-    }
+    s.u = fem::solve_static(model.K, model.f, model.bc, node_options, timings);
     s.strain_energy = fem::strain_energy(model.K, s.u);
     return s;
 }

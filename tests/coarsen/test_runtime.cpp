@@ -51,7 +51,7 @@ TEST(CoarseRuntime, FineModelAsItsOwnCoarseModelHasNoError) {
     SparseMatrix identity(fine.K.rows(), fine.K.cols());
     identity.setIdentity();
     m.to_fine = identity;
-    const coarsen::CoarseSolution uc = coarsen::solve_static(m, sc.solver);
+    const coarsen::CoarseSolution uc = coarsen::solve_coarse(m, sc.solver);
     const Vector u = scene::solve_static(fine, sc.solver).u;
     const coarsen::Errors e = coarsen::compare(fine, u, uc.u_fine);
     // Same matrix, same solver: only round-off of two identical factorizations differs.
@@ -95,7 +95,7 @@ TEST(CoarseRuntime, GalerkinModelIsTheEnergyProjection) {
     for (Index v = 0; v < coarse.num_nodes(); ++v)
         if (coarse.rest_positions(v, 0) < 1e-9) m.bc.fix_nodes({v}, Eigen::Vector2d::Zero());
     m.to_fine = P;
-    const coarsen::CoarseSolution uc = coarsen::solve_static(m, sc.solver);
+    const coarsen::CoarseSolution uc = coarsen::solve_coarse(m, sc.solver);
     const Vector u = scene::solve_static(fine, sc.solver).u;
     const coarsen::Errors e = coarsen::compare(fine, u, uc.u_fine);
     EXPECT_GT(e.energy_rel, 0.05);  // a real coarsening error, not a trivial case
@@ -127,7 +127,7 @@ TEST(CoarseRuntime, MismatchedSizesAreAnError) {
     m.K = SparseMatrix(6, 6);
     m.f = Vector::Zero(4);
     m.to_fine = SparseMatrix(10, 6);
-    test::expect_error([&] { coarsen::solve_static(m, {}); }, "coarse model broken");
+    test::expect_error([&] { coarsen::solve_coarse(m, {}); }, "coarse model broken");
 }
 
 }  // namespace

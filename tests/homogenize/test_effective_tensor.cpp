@@ -118,7 +118,7 @@ TEST_P(EffectiveTensorDim, HomogeneousObjectCoarsensToItsOwnTensor) {
          {"coarse",
           {{"mesh", grid(lo, hi, dim == 3 ? std::vector<int>{3, 2, 2} : std::vector<int>{5, 3},
                          dim == 3 ? "tet" : "tri")}}}});
-    test::distort_interior(*s.scene.coarse_mesh, 0.2, 3);
+    test::distort_interior(*s.scene.coarse.mesh, 0.2, 3);
     const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
     double worst = 0;
     for (const Mandel6& Cq : c.C) worst = std::max(worst, (Cq.topLeftCorner(n, n) - C).norm());
@@ -184,7 +184,7 @@ TEST(EffectiveTensor, SpringsInSeriesGiveTheSeriesStiffness) {
     const double k_fine = stiffness(s.fine.mesh, scene::solve_static(s.fine, {}).u);
     EXPECT_NEAR(k_fine, k_series, 1e-9 * k_series);  // uniaxial stress: exact up to round-off
     auto coarse = [&](const std::string& method) {
-        return stiffness(*s.scene.coarse_mesh, test::solve_coarse(homogenize::build_coarse_model(
+        return stiffness(*s.scene.coarse.mesh, test::solve_coarse(homogenize::build_coarse_model(
                                                    s.scene, s.fine, method)));
     };
     const double k_et = coarse("effective-tensor"), k_naive = coarse("naive");
@@ -408,7 +408,7 @@ TEST(EffectiveTensor, BadInputIsNamed) {
     flat.rest_positions << 0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0;
     flat.elements.resize(1, 4);
     flat.elements << 0, 1, 2, 3;
-    s.scene.coarse_mesh = flat;
+    s.scene.coarse.mesh = flat;
     test::expect_error([&] { homogenize::build_coarse_model(s.scene, s.fine, "voigt"); },
                        "coarse.mesh: element 0 is degenerate");
     // Boxes that select nothing on the coarse mesh.

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "coarsegrain/fem/dirichlet.hpp"
+#include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/mra/coarse_model.hpp"
 #include "coarsegrain/mra/multilevel_solver.hpp"
 #include "test_util.hpp"
@@ -33,7 +34,7 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         j["coarse"]["refinement"] = refinement;
         const scene::Scene s = scene::parse_scene(j, "test.json", "");
         const scene::FineModel fine = scene::build_fine_model(s);
-        const coarsen::CoarseModel m = build_coarse_model(s, fine);
+        const coarsen::CoarseModel m = coarsen::build_coarse_model(s, fine, "mra");
         EXPECT_EQ(m.method, "mra");
         EXPECT_EQ(m.nodes, 9);  // 2x2 cells
         EXPECT_EQ(m.elements, 4);
@@ -55,7 +56,7 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         solver.compute(sys.K);
         const Vector u = m.to_fine * fem::expand(sys, solver.solve(sys.rhs), m.bc, 18);
         const Hierarchy h =
-            build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, parse_options(j["coarse"], "t"));
+            build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, scene::parse_coarse_options(j["coarse"], "t").mra);
         MultilevelSolver ms(h);
         const Vector expected = ms.solve_level(fine.f, 1);
         // Two solves of the same 18-DOF system: round-off, 1e-12.
@@ -78,7 +79,7 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
 }
 
 TEST(MraCoarseModel, OptionsDefaultsAndValues) {
-    const Options d = parse_options(json(), "t");
+    const Options d = scene::parse_coarse_options(json(), "t").mra;
     EXPECT_EQ(d.levels, 3);
     EXPECT_EQ(d.refinement, Refinement::Linear);
     EXPECT_TRUE(std::isinf(d.radius.at(0)));
@@ -92,11 +93,11 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
     EXPECT_EQ(d.defect_tolerance, 0.0);
     EXPECT_EQ(d.max_radius, 16.0);
-    const Options o =
-        parse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
-                        "radius_grid": "coarse", "defect_tolerance": 1e-3, "max_radius": 12, "localization": "cell", "measurement": "stiffness", "patch": 2, "patch_clip": true, "truncation": 1e-5,
+    const Options o = scene::parse_coarse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
+                        "radius_grid": "coarse", "defect_tolerance": 1e-3, "max_radius": 12, "localization": "node", "measurement": "stiffness", "patch": 2, "patch_clip": true, "truncation": 1e-5,
                         "invariance": false, "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
-                      "t");
+                                                      "t")
+                          .mra;
     EXPECT_EQ(o.levels, 4);
     EXPECT_EQ(o.refinement, Refinement::Dirac);
     ASSERT_EQ(o.radius.size(), 3u);
@@ -106,13 +107,16 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(o.radius_grid, RadiusGrid::Coarse);
     EXPECT_EQ(o.defect_tolerance, 1e-3);
     EXPECT_EQ(o.max_radius, 12.0);
-    EXPECT_EQ(o.localization, Localization::Cell);
+    EXPECT_EQ(o.localization, Localization::Node);  // cell does not take patch_clip
     EXPECT_EQ(o.measurement, Measurement::Stiffness);
     EXPECT_EQ(o.patch, 2);
     EXPECT_TRUE(o.patch_clip);
     EXPECT_EQ(o.truncation, 1e-5);
     EXPECT_FALSE(o.invariance);
     EXPECT_EQ(o.dirichlet, DirichletTreatment::DiagonalPenalty);
+    EXPECT_EQ(scene::parse_coarse_options(json::parse(R"({"localization": "cell"})"), "t")
+                  .mra.localization,
+              Localization::Cell);
 }
 
 TEST(MraCoarseModel, BadOptionsNameTheirKey) {
@@ -120,54 +124,65 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
         const char* coarse;
         const char* message;
     } cases[] = {
-        {R"({"levels": 1})", "test.json: coarse.levels: expected an integer >= 2"},
+        {R"({"levels": 1})", "test.json: coarse.levels: expected an integer in [2, 17], got 1"},
+        {R"({"levels": 4294967298})", "coarse.levels: expected an integer in [2, 17]"},
+        {R"({"levels": 33})", "coarse.levels: expected an integer in [2, 17], got 33"},
         {R"({"levels": 2.5})", "coarse.levels: expected an integer"},
-        {R"({"refinement": "cubic"})", "coarse.refinement: expected \"dirac\" or \"linear\""},
+        {R"({"refinement": "cubic"})",
+         "coarse.refinement: unknown value \"cubic\"; expected one of \"dirac\", \"linear\""},
         {R"({"radius": 0.5})", "coarse.radius: expected a number >= 1 or \"inf\""},
         {R"({"radius": "infinite"})", "coarse.radius: expected a number >= 1 or \"inf\""},
         {R"({"levels": 3, "radius": [2, 3, 4]})", "coarse.radius: expected levels - 1 = 2"},
         {R"({"radius": [2, "x"]})", "coarse.radius[1]"},
         {R"({"radius_grid": "medium"})", "coarse.radius_grid"},
         {R"({"localization": "patch"})",
-         "coarse.localization: expected \"node\" or \"cell\", got \"patch\""},
-        {R"({"measurement": "mass"})",
-         "coarse.measurement: expected \"canonical\" or \"stiffness\", got \"mass\""},
-        {R"({"patch": 0})", "coarse.patch"},
+         "coarse.localization: unknown value \"patch\"; expected one of \"node\", \"cell\""},
+        {R"({"measurement": "mass"})", "coarse.measurement: unknown value \"mass\""},
+        {R"({"patch": 0})", "coarse.patch: expected an integer in [1, 65536], got 0"},
         {R"({"patch_clip": 1})", "coarse.patch_clip: expected true or false, got 1"},
         {R"({"defect_tolerance": -1e-3})",
          "coarse.defect_tolerance: expected a number >= 0 (0: fixed radius), got -0.001"},
         {R"({"max_radius": 0.5})", "coarse.max_radius: expected a number >= 1, got 0.5"},
         {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
         {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},
-        {R"({"dirichlet": "clamp"})", "coarse.dirichlet: expected \"constrain\""},
-        {R"({"spectrum_max_dofs": -1})", "coarse.spectrum_max_dofs: expected an integer >= 0"},
+        {R"({"dirichlet": "clamp"})", "coarse.dirichlet: unknown value \"clamp\""},
+        {R"({"spectrum_max_dofs": -1})", "coarse.spectrum_max_dofs: expected an integer in [0, "},
         {R"({"cell_tensors": 1})", "coarse.cell_tensors: expected true or false"},
-        {R"({"levels": 4})", "coarse.levels: 4 levels need cells per axis divisible by 2^3 = 8"},
+        {R"({"radius": 2, "localization": "cell", "patch": 2, "patch_clip": true})",
+         "coarse: mra: cell localization does not clip patches"},
+        {R"({"radius": 2, "localization": "cell", "dirichlet": "penalty"})",
+         "coarse: mra: cell localization needs the eliminate, constrain or ignore"},
     };
+    // Every value is checked when the scene is parsed, before a mesh is built.
     for (const auto& c : cases) {
         json j = scene_json();
         j["coarse"] = json::parse(c.coarse);
-        if (std::string(c.coarse).find("\"levels\": 4") != std::string::npos)
-            j["mesh"]["grid"]["cells"] = {8, 12};
-        test::expect_error(
-            [&] {
-                const scene::Scene s = scene::parse_scene(j, "test.json", "");
-                build_coarse_model(s, scene::build_fine_model(s));
-            },
-            c.message);
+        j["mesh"] = {{"file", "does-not-exist.msh"}};
+        test::expect_error([&] { scene::parse_scene(j, "test.json", ""); }, c.message);
     }
+    // What depends on the mesh is checked before any assembly.
+    json j = scene_json();
+    j["coarse"]["levels"] = 4;
+    j["mesh"]["grid"]["cells"] = {8, 12};
+    const scene::Scene s = scene::parse_scene(j, "test.json", "");
+    test::expect_error([&] { coarsen::validate_method(s, "mra-linear"); },
+                       "test.json: coarse.levels: mra: 4 levels need cells per axis divisible by "
+                       "2^3 = 8, but axis 1 has 12 cells");
 }
 
 TEST(MraCoarseModel, UnsupportedInputIsReported) {
     json j = scene_json();
     j["dirichlet"][0]["value"] = {0.0, 0.1};
     const scene::Scene s = scene::parse_scene(j, "test.json", "");
-    test::expect_error([&] { build_coarse_model(s, scene::build_fine_model(s)); },
-                       "only zero prescribed displacements");
-    const scene::Scene s2 = scene::parse_scene(scene_json(), "test.json", "");
-    scene::FineModel fine = scene::build_fine_model(s2);
-    fine.mesh.grid.reset();
-    test::expect_error([&] { build_coarse_model(s2, fine); }, "needs a regular grid");
+    test::expect_error([&] { coarsen::validate_method(s, "mra-dirac"); },
+                       "test.json: dirichlet[0].value: the mra-dirac method supports only zero "
+                       "prescribed displacements, got [0, 0.1]");
+    j = scene_json();
+    j["mesh"]["grid"]["element"] = "tri";
+    const scene::Scene s2 = scene::parse_scene(j, "test.json", "");
+    scene::Scene s3 = s2;
+    s3.mesh.grid.reset();
+    test::expect_error([&] { coarsen::validate_method(s3, "mra"); }, "needs a regular grid");
 }
 
 }  // namespace

@@ -14,10 +14,10 @@ struct CoarseSolution {
     Vector u_fine;  ///< to_fine * u: the coarse solution on the fine nodes
 };
 
-/// Solves K u = f on the coarse DOFs with model.bc eliminated and maps u to the fine nodes.
-/// Phases "factorize" and "solve" go to `timings`.
+/// Solves K u = f on the coarse DOFs with model.bc eliminated (fem::solve_static) and maps u to
+/// the fine nodes. Phases "factorize" and "solve" go to `timings`.
 /// @throws Error if the model's sizes disagree; NotPositiveDefinite if it does not hold
-CoarseSolution solve_static(const CoarseModel& model, const solve::SolverOptions& options,
+CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions& options,
                             Timings* timings = nullptr);
 
 /// How far a coarse solution carried to the fine mesh, u_c, is from the fine solution u.
@@ -37,20 +37,27 @@ struct Errors {
 Errors compare(const scene::FineModel& fine, const Vector& u, const Vector& u_c);
 
 /// Names of the methods `build_coarse_model` knows, in the order reports list them.
-/// "mra-linear" and "mra-dirac" are "mra" with coarse.refinement set to "linear" / "dirac"
-/// (replacing the scene's), so that one run compares both refinements (Chen 2019, Sec. 3.7);
-/// "mra-linear-blind" and "mra-dirac-blind" also set coarse.dirichlet to "ignore" (the
-/// boundary-blind construction of Chen et al. 2018 that Fig. 12 compares with).
+/// "mra-linear" and "mra-dirac" are "mra" with the linear / Dirac refinement (replacing
+/// coarse.refinement), so that one run compares both refinements (Chen 2019, Sec. 3.7);
+/// "mra-linear-blind" and "mra-dirac-blind" also use the boundary-blind Dirichlet treatment
+/// (coarse.dirichlet "ignore", the construction of Chen et al. 2018 that Fig. 12 compares with).
 const std::vector<std::string>& method_names();
 
 /// The methods a scene's "coarse" block configures (what `--method all` runs): with coarse.mesh
 /// effective-tensor, naive, voigt and reuss; with coarse.levels mra-linear and mra-dirac, and
 /// with coarse.boundary_blind true also mra-linear-blind and mra-dirac-blind.
-/// @throws Error naming the scene if it configures none
+/// @throws InvalidScene naming the scene if it configures none
 std::vector<std::string> configured_methods(const scene::Scene& scene);
 
-/// Builds the coarse model of `method` (one of method_names()) from the scene's "coarse" block.
-/// @throws InvalidScene naming the key if an option is invalid or missing for that method
+/// Checks, before any assembly, that `method` can run on the scene: a coarse.mesh for the
+/// effective tensors and the baselines; for the mra methods a regular grid whose cells per axis
+/// are divisible by 2^(levels - 1) and zero prescribed displacements. (Every option's value
+/// was validated when the scene was loaded.)
+/// @throws Error for an unknown method, InvalidScene naming the key otherwise
+void validate_method(const scene::Scene& scene, const std::string& method);
+
+/// Builds the coarse model of `method` (one of method_names()) with the scene's coarse options.
+/// @throws everything validate_method throws; Error from the method's construction
 CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
                                const std::string& method);
 

@@ -2,7 +2,9 @@
 /// @file Dirichlet conditions, eliminated from the system (not a penalty).
 #include <vector>
 
+#include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/solve/spd_solver.hpp"
 
 namespace coarsegrain::fem {
 
@@ -35,5 +37,13 @@ ReducedSystem reduce(const SparseMatrix& K, const Vector& f, const Dirichlet& bc
 
 /// Full solution from the free-DOF solution and the prescribed values.
 Vector expand(const ReducedSystem& sys, const Vector& u_free, const Dirichlet& bc, Index num_dofs);
+
+/// Solves K u = f with the conditions bc eliminated: reduce, one SpdSolver factorization of
+/// K_ff, expand (the one static solve of fine and coarse models). Phases "factorize" and
+/// "solve" go to `timings`.
+/// @return the full solution, num_dofs = K.rows() entries, prescribed values included
+/// @throws Error as reduce; NotPositiveDefinite if the conditions do not hold the structure
+Vector solve_static(const SparseMatrix& K, const Vector& f, const Dirichlet& bc,
+                    const solve::SolverOptions& options, Timings* timings = nullptr);
 
 }  // namespace coarsegrain::fem

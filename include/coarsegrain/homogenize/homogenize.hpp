@@ -19,10 +19,6 @@
 
 namespace coarsegrain::homogenize {
 
-/// Reads and validates coarse.normals, coarse.boundary and coarse.map.
-/// @throws InvalidScene naming coarse.<key> and the allowed values
-Options parse_options(const scene::Scene& scene);
-
 /// Everything a coarsening computes (tests and diagnostics read the intermediate results).
 struct Coarsening {
     std::string method;

@@ -11,25 +11,6 @@
 
 namespace coarsegrain::mra {
 
-/// Reads the hierarchy options from a scene's "coarse" block (null: all defaults). Keys (other
-/// keys belong to other methods and are ignored):
-/// - "levels": integer >= 2 (default 3);
-/// - "refinement": "dirac" | "linear" (default);
-/// - "radius": number >= 1, "inf", or an array of levels - 1 of them, entry k-1 for the step
-///   that builds level k (default "inf": global solves);
-/// - "radius_grid": "fine" (default) | "coarse";
-/// - "defect_tolerance": number >= 0 (default 0, Options::defect_tolerance), "max_radius":
-///   number >= 1 (default 16);
-/// - "patch": integer >= 1 (default 1, Options::patch; finite radii only);
-/// - "localization": "node" (default) | "cell" (Localization; finite radii only);
-/// - "measurement": "canonical" (default) | "stiffness" (Measurement; no effect on Dirac);
-/// - "truncation": number in [0, 1) (default 1e-7, Options::truncation);
-/// - "invariance": true (default) | false;
-/// - "dirichlet": "constrain" (default) | "eliminate" | "penalty" | "diagonal_penalty" | "ignore"
-///   (boundary-blind, as Chen et al. 2018: DirichletTreatment::Ignore).
-/// @throws InvalidScene naming `coarse.<key>` and the source
-Options parse_options(const nlohmann::json& coarse, const std::string& source);
-
 /// The coarsest level of a hierarchy as a coarse model: K = S A^1 S, f = S g^1 with
 /// g^1 = C̃^1...C̃^{q-1} f, to_fine = Φ^{1,T} S, over all DOFs of the coarsest grid. S is
 /// diagonal: the coefficients v of level 1 are measurements C^1...C^{q-1} u (Eq. 9), which for
@@ -42,9 +23,6 @@ Options parse_options(const nlohmann::json& coarse, const std::string& source);
 /// A and B, and storage bytes of Φ and Ψ; `timings` the phases of h. to_fine keeps h and
 /// applies Φ^{1,T} level by level (reconstruct) without forming Φ^1.
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, const Vector& f_fine);
-
-/// @throws InvalidScene naming `coarse.<key>` and the source
-CompareOptions parse_compare_options(const nlohmann::json& coarse, const std::string& source);
 
 /// Cell tensors (cell_tensors.hpp) are computed only for coarsest grids of at most this many
 /// cells (one small free-body hierarchy each).
@@ -72,10 +50,11 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
                                        const nlohmann::json& build_levels,
                                        const CompareOptions& options);
 
-/// Builds the hierarchy from scene.coarse options (parse_options) and returns the coarsest
-/// level as a CoarseModel (coarse_model) whose compare_with_fine is compare_levels with
-/// parse_compare_options (the hierarchy is kept alive by it).
-/// @throws InvalidScene for bad options or nonzero Dirichlet values; Error as build_hierarchy
-coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine);
+/// Builds the hierarchy of the fine model with `options` and returns the coarsest level as a
+/// CoarseModel (coarse_model) whose compare_with_fine is compare_levels with `compare` (the
+/// hierarchy is kept alive by it).
+/// @throws Error as build_hierarchy (coarsen::validate_method checks the scene beforehand)
+coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOptions& compare,
+                                        const scene::FineModel& fine);
 
 }  // namespace coarsegrain::mra

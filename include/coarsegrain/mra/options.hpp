@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "coarsegrain/common/types.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 
 namespace coarsegrain::mra {
@@ -113,6 +114,22 @@ struct Options {
     /// reconstruct() give Φ^k and Φ^{k,T} u^k on demand from the C̃^k.
     bool store_bases = false;
 };
+
+/// Largest Options::levels: a grid of up to 1e5 cells per axis halves at most 16 times.
+inline constexpr int kMaxLevels = 17;
+
+/// Checks the options' ranges and combinations (the Options fields name the scene's coarse.*
+/// keys): levels in 2..kMaxLevels; one radius or levels - 1, each >= 1 (or infinity); patch >=
+/// 1; truncation in [0, 1); penalty > 0; defect_tolerance finite and >= 0; max_radius >= 1; and
+/// for cell localization with a finite radius no patch_clip, the eliminate, constrain or ignore
+/// treatment, and no defect_tolerance.
+/// @throws Error naming the option
+void validate(const Options& options);
+
+/// Checks that a grid of `cells` cells per axis (first dim entries) has the levels of `options`:
+/// cells per axis divisible by 2^(levels - 1).
+/// @throws Error naming the axis
+void validate_grid(const Options& options, const Eigen::Vector3i& cells, int dim);
 
 /// Options of compare_levels, read from the scene's "coarse" block (parse_compare_options).
 struct CompareOptions {

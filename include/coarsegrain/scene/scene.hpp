@@ -9,12 +9,15 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
+#include "coarsegrain/homogenize/options.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
+#include "coarsegrain/mra/options.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 
 namespace coarsegrain::scene {
@@ -31,6 +34,28 @@ struct BoxCondition {
     Eigen::VectorXd value;  ///< prescribed displacement (dirichlet) or traction (force/area)
 };
 
+/// The scene's "coarse" block: the options of every coarsening method, parsed and validated
+/// when the scene is loaded (docs/guide.md "coarse"), so that a bad value fails before any mesh
+/// is read or any matrix assembled.
+struct CoarseOptions {
+    /// coarse.mesh, read like "mesh" (effective-tensor, naive, voigt, reuss); its material ids
+    /// are ignored.
+    std::optional<mesh::Mesh> mesh;
+    /// coarse.normals, coarse.boundary, coarse.map (effective tensors and baselines).
+    homogenize::Options homogenize;
+    /// coarse.levels was given: the scene configures the material-adapted hierarchy.
+    bool hierarchy = false;
+    /// coarse.boundary_blind (true | false, default false): `--method all` adds the
+    /// boundary-blind variants mra-linear-blind and mra-dirac-blind.
+    bool boundary_blind = false;
+    /// coarse.levels, refinement, radius, radius_grid, defect_tolerance, max_radius, patch,
+    /// patch_clip, localization, measurement, truncation, invariance, dirichlet
+    /// (mra::validate holds).
+    mra::Options mra;
+    /// coarse.spectrum_max_dofs, coarse.cell_tensors.
+    mra::CompareOptions mra_compare;
+};
+
 /// A parsed, validated scene.
 struct Scene {
     std::string source;  ///< file name (or "demo") for messages
@@ -43,22 +68,20 @@ struct Scene {
     std::vector<BoxCondition> traction;
     std::vector<Eigen::VectorXd> probes;
     solve::SolverOptions solver;
-    /// The "coarse" block as given (its keys checked against kCoarseKeys); each coarsening
-    /// method reads and validates its own options from it.
-    nlohmann::json coarse;
-    /// coarse.mesh, read like "mesh" (effective-tensor family); material ids are ignored.
-    std::optional<mesh::Mesh> coarse_mesh;
+    /// The "coarse" block, parsed and validated (CoarseOptions).
+    CoarseOptions coarse;
     /// Folder that relative file names in the scene are resolved against.
     std::string base_dir;
 };
 
-/// Every key the "coarse" block may hold, over all methods.
-inline constexpr std::initializer_list<const char*> kCoarseKeys = {
-    "mesh",        "normals",           "boundary",     "map",
-    "levels",      "refinement",        "radius",       "radius_grid",
-    "patch",       "patch_clip",        "truncation",   "invariance",
-    "dirichlet",   "spectrum_max_dofs", "cell_tensors", "localization",
-    "measurement", "defect_tolerance",  "max_radius",   "boundary_blind"};
+/// Parses and validates a "coarse" block's options, all but coarse.mesh (null: defaults).
+/// @throws InvalidScene naming coarse.<key>, the expected values and `source`
+CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::string& source);
+
+/// Parses scene JSON text. Rejects duplicate keys (naming the key's path: a repeated key
+/// would otherwise silently win) and numbers beyond double range.
+/// @throws InvalidScene naming `source`
+nlohmann::json parse_json(std::string_view text, const std::string& source);
 
 /// Reads and validates a scene file; relative file names inside are relative to its folder.
 /// @throws InvalidScene / MeshReadError / Error naming the file and key
@@ -76,6 +99,20 @@ struct FineModel {
     Vector f;        ///< num_dofs load: gravity + traction
     fem::Dirichlet bc;
 };
+
+/// The scene's Dirichlet boxes on `mesh`: the nodes inside each box, all components fixed at
+/// its value (a later box wins on shared nodes). `what` names the mesh in errors ("mesh",
+/// "coarse mesh").
+/// @throws InvalidScene naming the condition if a box selects no node
+fem::Dirichlet dirichlet_conditions(const Scene& scene, const mesh::Mesh& mesh,
+                                    const std::string& what);
+
+/// The scene's load on `mesh` (num_dofs entries): gravity times the element masses, plus each
+/// traction box's force per unit area on the boundary facets inside it.
+/// @throws InvalidScene naming the condition if a traction box selects no boundary facet
+Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
+                   const material::ElementMaterials& materials, const mesh::Boundary& boundary,
+                   const std::string& what);
 
 /// Assembles the fine model. Phases "assemble" (stiffness, loads) are added to `timings`.
 /// @throws InvalidScene if a box selects no node/facet, Error on bad elements

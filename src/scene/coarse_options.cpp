@@ -1,0 +1,129 @@
+// The "coarse" block of a scene: every coarsening method's options, parsed and validated in one
+// place (scene.hpp, CoarseOptions).
+#include <fmt/ranges.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "coarsegrain/scene/scene.hpp"
+#include "json_reader.hpp"
+
+namespace coarsegrain::scene {
+
+namespace {
+
+/// A string among `choices`; returns its position.
+std::size_t parse_choice(const JsonReader& r, std::initializer_list<const char*> choices) {
+    const std::string s = r.string();
+    std::vector<std::string> quoted;
+    for (const char* c : choices) {
+        if (s == c) return quoted.size();
+        quoted.push_back(fmt::format("\"{}\"", c));
+    }
+    r.fail("unknown value \"{}\"; expected one of {}", s, fmt::join(quoted, ", "));
+}
+
+double parse_radius(const JsonReader& r) {
+    if (r.json().is_string()) {
+        r.fail_unless(r.string() == "inf", "expected a number >= 1 or \"inf\", got {}",
+                      r.json().dump());
+        return std::numeric_limits<double>::infinity();
+    }
+    const double v = r.number();
+    r.fail_unless(v >= 1, "expected a number >= 1 or \"inf\", got {}", v);
+    return v;
+}
+
+homogenize::Options parse_homogenize(const JsonReader& r) {
+    homogenize::Options o;
+    if (auto v = r.find("normals")) o.coarse_normals = parse_choice(*v, {"coarse", "fine"}) == 0;
+    if (auto v = r.find("boundary")) o.mixed_boundary = parse_choice(*v, {"neumann", "mixed"}) == 1;
+    if (auto v = r.find("map")) o.harmonic_map = parse_choice(*v, {"barycentric", "harmonic"}) == 1;
+    return o;
+}
+
+mra::Options parse_mra(const JsonReader& r) {
+    using namespace mra;
+    Options o;
+    if (auto v = r.find("levels")) o.levels = static_cast<int>(v->integer(2, kMaxLevels));
+    if (auto v = r.find("refinement"))
+        o.refinement = parse_choice(*v, {"dirac", "linear"}) == 0 ? Refinement::Dirac
+                                                                  : Refinement::Linear;
+    if (auto v = r.find("radius")) {
+        if (v->json().is_array()) {
+            const std::size_t n = v->array_size();
+            v->fail_unless(static_cast<int>(n) == o.levels - 1,
+                           "expected levels - 1 = {} radii (one per step, coarsest first), got {}",
+                           o.levels - 1, n);
+            o.radius.clear();
+            for (std::size_t i = 0; i < n; ++i) o.radius.push_back(parse_radius(v->at(i)));
+        } else {
+            o.radius = {parse_radius(*v)};
+        }
+    }
+    if (auto v = r.find("radius_grid"))
+        o.radius_grid =
+            parse_choice(*v, {"fine", "coarse"}) == 0 ? RadiusGrid::Fine : RadiusGrid::Coarse;
+    if (auto v = r.find("localization"))
+        o.localization =
+            parse_choice(*v, {"node", "cell"}) == 0 ? Localization::Node : Localization::Cell;
+    if (auto v = r.find("measurement"))
+        o.measurement = parse_choice(*v, {"canonical", "stiffness"}) == 0 ? Measurement::Canonical
+                                                                          : Measurement::Stiffness;
+    if (auto v = r.find("defect_tolerance")) {
+        o.defect_tolerance = v->number();
+        v->fail_unless(o.defect_tolerance >= 0, "expected a number >= 0 (0: fixed radius), got {}",
+                       o.defect_tolerance);
+    }
+    if (auto v = r.find("max_radius")) {
+        o.max_radius = v->number();
+        v->fail_unless(o.max_radius >= 1, "expected a number >= 1, got {}", o.max_radius);
+    }
+    if (auto v = r.find("patch")) o.patch = static_cast<int>(v->integer(1, 1 << 16));
+    if (auto v = r.find("patch_clip")) o.patch_clip = v->boolean();
+    if (auto v = r.find("truncation")) {
+        o.truncation = v->number();
+        v->fail_unless(o.truncation >= 0 && o.truncation < 1, "expected a number in [0, 1), got {}",
+                       o.truncation);
+    }
+    if (auto v = r.find("invariance")) o.invariance = v->boolean();
+    if (auto v = r.find("dirichlet")) {
+        constexpr DirichletTreatment treatments[] = {
+            DirichletTreatment::Constrain, DirichletTreatment::Eliminate,
+            DirichletTreatment::Penalty, DirichletTreatment::DiagonalPenalty,
+            DirichletTreatment::Ignore};
+        o.dirichlet = treatments[parse_choice(
+            *v, {"constrain", "eliminate", "penalty", "diagonal_penalty", "ignore"})];
+    }
+    try {
+        validate(o);  // the combinations; each key's range is checked above
+    } catch (const Error& e) {
+        r.fail("{}", e.what());
+    }
+    return o;
+}
+
+}  // namespace
+
+CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::string& source) {
+    CoarseOptions o;
+    if (coarse.is_null()) return o;
+    const JsonReader r(coarse, "coarse", source);
+    // One list for every method, so that one scene can be coarsened by each of them.
+    r.allow_only({"mesh", "normals", "boundary", "map", "levels", "refinement", "radius",
+                  "radius_grid", "patch", "patch_clip", "truncation", "invariance", "dirichlet",
+                  "spectrum_max_dofs", "cell_tensors", "localization", "measurement",
+                  "defect_tolerance", "max_radius", "boundary_blind"});
+    o.homogenize = parse_homogenize(r);
+    o.hierarchy = r.has("levels");
+    o.mra = parse_mra(r);
+    if (auto v = r.find("boundary_blind")) o.boundary_blind = v->boolean();
+    if (auto v = r.find("spectrum_max_dofs"))
+        o.mra_compare.max_spectrum_dofs =
+            static_cast<Index>(v->integer(0, std::numeric_limits<Index>::max()));
+    if (auto v = r.find("cell_tensors")) o.mra_compare.cell_tensors = v->boolean();
+    return o;
+}
+
+}  // namespace coarsegrain::scene
