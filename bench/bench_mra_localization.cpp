@@ -5,7 +5,7 @@
 // along the hanging direction) and the same layers across it ("across": stiff slabs spanning
 // the width, each coarse cell of the finest step one layer at 16x16).
 //
-//   bench_mra_localization [cells=32] [levels=3] [tables=rtci]
+//   bench_mra_localization [cells=32] [levels=3] [tables=rtc]
 //     r: radius table (rho 1..8, fine/coarse rings, invariance on/off)
 //     t: truncation table (0, 1e-7, 1e-5, 1e-4, 1e-2) for global and localized solves
 //     c: contrast table (1e1..1e4), hung square only

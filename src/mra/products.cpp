@@ -11,9 +11,9 @@ namespace coarsegrain::mra::detail {
 namespace {
 
 /// Eigen's sparse-sparse product costs about this many times more per multiply-add than a dense
-/// (blocked, vectorized) one: measured on the 32x32 grid after global solves, A^4 = C̃ A C̃^T
-/// took 1.4 s sparse against 0.04 s dense. Products whose dense form needs more than 6e7
-/// entries (480 MB) per operand are always sparse.
+/// (blocked, vectorized) one (A^4 on the 32x32 grid after global solves: 1.4 s sparse against
+/// 0.04 s dense). Products whose dense form needs more than 6e7 entries (480 MB) per operand are
+/// always sparse.
 constexpr double kSparseFlopPenalty = 30;
 constexpr double kDenseProductMaxEntries = 6e7;
 
@@ -118,27 +118,20 @@ bool dense_product_pays(const SparseMatrix& X, const SparseMatrix& Y) {
                                            entries(X) * static_cast<double>(Y.cols());
 }
 
-/// congruence goes dense (BLAS) when at least this fraction of M's entries is stored. With
-/// Eigen's dense products (SSE only) the grouped kernel took A^1 = C̃ A^2 C̃^T of the 24x12x12
-/// hex checker in 0.72 s against 2.87 s dense with C̃ 17% dense (rho = 5 fine rings); BLAS's
-/// products are 5x faster (solve::gemm). With them, C̃ of global solves on Table 1's 40x20x20
-/// box (32% dense) took A^1 in 36.8 s against 80.6 s grouped (build 89.1 s against 137.8 s, peak
-/// 7.0 against 5.8 GB), and the fine step of three levels on 64x16x16 hexes (36%) 61.4 s
-/// against 78.6 s; 44.5 s with M X by columns (times_sparse; the box: 35.9 s, its BLAS product
-/// M (M X)^T being 3e12 multiply-adds).
+/// congruence goes dense (BLAS) when at least this fraction of M's entries is stored: C̃ of
+/// global solves on Table 1's 40x20x20 box (32% dense) gives A^1 in 36.8 s against 80.6 s in the
+/// grouped kernel, at a higher peak (7.0 against 5.8 GB). Measurements: docs/performance.md.
 constexpr double kDenseCongruence = 0.3;
 
 /// The dense congruence holds M, the result and one block M[J, :] X densely, and X too if it is
-/// dense enough (kSparseDensePenalty): at most this many entries in all (4.8 GB). The coarse
-/// step of three levels on 64x16x16 hexes after global solves (M = C̃^1 1275 x 8019, X = A^2 86%
-/// dense: 7.6e7 entries) took 1.5 s (6.2-6.5 s by Eigen's dense product, 49.7 s in the grouped
-/// kernel); its fine step (M 8019 x 55488: 5.4e8 entries) fits too.
+/// dense enough (kSparseDensePenalty): at most this many entries in all (4.8 GB), so that both
+/// steps of three levels on 64x16x16 hexes after global solves fit (the fine one, M 8019 x
+/// 55488, holds 5.4e8 entries).
 constexpr double kDenseCongruenceMaxEntries = 6e8;
 
 /// Eigen's sparse times dense product costs about this many times more per multiply-add than
-/// BLAS's dense one: X (8019 square, banded) times an 8019 x 1275 dense matrix took 0.26 / 0.47 /
-/// 1.12 s at 1 / 2 / 5% density against 1.14-1.17 s by dgemm, X's dense copy included (2
-/// threads, idle).
+/// BLAS's dense one (X 8019 square, banded, times an 8019 x 1275 dense matrix: 1.12 s at 5%
+/// density against 1.14-1.17 s by dgemm, X's dense copy included).
 constexpr double kSparseDensePenalty = 20;
 
 /// Columns per block of the lower triangle's dense product.
@@ -157,8 +150,8 @@ SparseMatrix dense_product(const SparseMatrix& X, const SparseMatrix& Y) {
 /// M X for a dense M and a sparse X, by columns of X in parallel (OpenMP): column j is the
 /// combination of M's columns at X's entries in column j, each a contiguous multiply-add of
 /// M.rows() values. (Eigen's X M^T writes each entry's row of the result across its columns,
-/// with a stride of X.rows(): 40% of A^2 on the 48x12x12 accordion's fine step, where A^2 went
-/// from 6.65 to 4.56 s.)
+/// with a stride of X.rows(): A^2 of the 48x12x12 accordion's fine step takes 6.65 s that way
+/// against 4.56 s.)
 Matrix times_sparse(const Eigen::Ref<const Matrix>& M, const SparseMatrix& X) {
     Matrix P(M.rows(), X.cols());
 #pragma omp parallel for schedule(dynamic, 256)

@@ -27,15 +27,12 @@ SparseMatrix symmetrized(const SparseMatrix& M);
 /// or, where at least half of the entries scanned meet it (dense-ish M, e.g. after global
 /// solves), by M's rows with each result row in registers.
 /// Every column of M is read once per group instead of once per row of M, and the inner loops
-/// are dense |J|-wide multiply-adds: on a 40x20x20 hex grid after localized solves (rho = 5
-/// fine rings, C̃ with 22M entries, A^1 36% dense, 2 threads) A^1 took 6.6 s and 1.4 GB peak,
-/// against 17.9 s and 2.2 GB for column-by-column Gustavson products, which stream C̃ from memory
-/// once per column of the result and hold X M^T. With global solves there (C̃ 132M entries, 32%
-/// dense) A^1 took 97.7 s by columns, 80.6 s with the rows, and 36.8 s by the dense product.
-/// By columns, a run of consecutive columns with one pattern (a node's DOFs) is taken at once,
-/// so that each row of the accumulator is read and written once per run instead of once per
-/// column: 32^3 hexes, Dirac, rho = 5, A^1 4.9 s -> 4.35 s, and 3.46 s once the truncation kept
-/// a node's columns in one pattern (truncate_rows); 64^3: 62.4 s -> 40.7 s for both.
+/// are dense |J|-wide multiply-adds: on a 40x20x20 hex grid after localized solves (rho = 5 fine
+/// rings) A^1 takes 6.6 s against 17.9 s for column-by-column Gustavson products, which stream
+/// C̃ from memory once per column of the result. By columns, a run of consecutive columns with
+/// one pattern (a node's DOFs, see truncate_rows) is taken at once, so that each row of the
+/// accumulator is read and written once per run instead of once per column. Measurements of
+/// each kernel: docs/performance.md.
 SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
                         const std::vector<IndexVector>& groups);
 

@@ -36,13 +36,9 @@ constexpr Index kMinParallelColumns = 4096;
 /// CHOLMOD's supernodal Cholesky (one BLAS thread per OpenMP thread), in a fill-reducing order
 /// of the node graph (solve::fill_reducing_order) the region builds its system in (no permuted
 /// copies inside CHOLMOD), order and symbolic analysis reused across regions of the same pattern
-/// (solve_region). Measured (bench_mra, checker, 2 threads, localized solves): 24^3 cells, rho = 2
-/// fine rings (regions of 400-1000 unknowns) 10.5 s with Eigen's simplicial LLT from 400 unknowns
-/// (re-ordered per region) and 3.8 s with CHOLMOD from 100; 32^3: 24.9 s against 9.6 s. The dense
-/// bounds: 100 against 400 unknowns gave 0.84 s against 1.10 s on 24x12x12, 3 levels, rho = 2 (5.0
-/// s against 5.5 s at rho = 5); the density 0.25 against 0.5 and never dense gave 0.59 / 0.81 /
-/// 0.73 s for the coarse step of 24x12x12 and 5.3 / 4.7 / 5.9 s for that of 32x16x16 (3 levels, rho
-/// = 5: B^1 regions of ~1000-6000 unknowns, ~25-55% dense), equal within this machine's +-10%.
+/// (solve_region). The localized solves of 24^3 cells at rho = 2 fine rings (regions of 400-1000
+/// unknowns) take 3.8 s against 10.5 s with Eigen's simplicial LLT from 400 unknowns; the
+/// dense bounds' measurements are in docs/performance.md.
 constexpr Index kDenseLocalLimit = 100;
 constexpr Index kDenseLocalMax = 4000;
 constexpr double kDenseLocalDensity = 0.25;
@@ -872,9 +868,9 @@ std::vector<char> correct_invariance(SparseMatrix& Ct, const StepGeometry& g,
     const Index* inner = Ct.innerIndexPtr();
     double* value = Ct.valuePtr();
     std::vector<char> done(static_cast<std::size_t>(ncols), 0);
-    // At most 6 modes: small matrices of fixed capacity, and N kept per thread. With a heap
-    // allocation per entry of C̃ this phase took 0.65 / 1.9 s at 40x20x20 / 32^3 (Dirac, rho =
-    // 5), against 0.25 / 0.52 s now; 14-16 s of the 64^3 build.
+    // At most 6 modes: small matrices of fixed capacity, and N kept per thread. A heap
+    // allocation per entry of C̃ makes this phase 2.6-3.7x slower (32^3, Dirac, rho = 5: 1.9 s
+    // against 0.52 s).
     using Modes = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
     using ModeMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
 #pragma omp parallel if (ncols >= kMinParallelColumns)

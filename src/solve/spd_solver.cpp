@@ -64,11 +64,9 @@ constexpr double kSingularEigenvalueRatio = 1e-14;
 /// CHOLMOD's supernode amalgamation thresholds (Common->nrelax; CHOLMOD's defaults are 4, 16,
 /// 48): supernodes of fewer columns than these are merged with their parent when the merged
 /// supernode's fraction of explicit zeros stays below Common->zrelax (0.8, 0.1, 0.05, kept).
-/// Larger supernodes give the dense kernels (OpenBLAS dsyrk/dgemm/dpotrf) larger blocks.
-/// Measured on the 52K-DOF layered hex box of bench/ccx_vs_coarsegrain.py (node-graph METIS
-/// ordering, 2 threads, median of 5 factorizations, three interleaved rounds): 1.77-2.39 s
-/// with the defaults, 1.41-1.76 s with these; the factor stores 11% more entries (45.0M
-/// against 40.5M), and 64, 256, 1024 stored 30% more for no further gain.
+/// Larger supernodes give the dense kernels (OpenBLAS dsyrk/dgemm/dpotrf) larger blocks: the
+/// 52K-DOF layered hex box of bench/ccx_vs_coarsegrain.py factorizes in 1.41-1.76 s against
+/// 1.77-2.39 s with the defaults, for 11% more factor entries (docs/performance.md).
 constexpr std::array<std::size_t, 3> kSupernodeRelaxation{32, 128, 512};
 
 /// Factors below this many bytes are not checked against the available memory (reading it
@@ -240,9 +238,8 @@ std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
 }
 
 // Dense factorizations (DenseCholesky) of fewer unknowns run LAPACK on one thread: waking the
-// second OpenBLAS thread costs more than it shares. Measured (dpotrf, 2 cores, 2 threads
-// against 1): 243 unknowns 0.40 ms against 0.30-0.33 ms, 400: 1.15 against 1.0-1.04 ms, 800:
-// 8.6-9.1 against 9.5-9.9 ms, 1188: 10 against 17.5 ms.
+// second OpenBLAS thread costs more than it shares (dpotrf of 243 unknowns: 0.40 ms on 2 threads
+// against 0.30-0.33 ms on one; of 1188: 10 against 17.5 ms; docs/performance.md).
 constexpr Index kDenseParallelMin = 800;
 
 using Ldlt = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<Index>>;
@@ -256,13 +253,10 @@ constexpr Index kParallelNonzeros = 200000;
 
 // Matrices with more than this fraction of their entries stored are factorized in their own
 // order, as dense matrices (LAPACK dpotrf): a fill-reducing ordering can save little on them and
-// costs a large part of the factorization (analysis of a dense 3000 x 3000 matrix: 0.37 s with
-// AMD, 0.15-0.2 s without, against 0.5-0.6 s for the factorization; the coarse operators of
-// global hierarchies are dense), and CHOLMOD's own work on a small dense matrix (symbolic
-// analysis, permuted transposes, supernode bookkeeping) costs several times its flops. Measured
-// on the coarsest operators of 3-level hierarchies (bench_mra, 2 threads): the 243-DOF one of
-// the 32x8x8 beam took 1.6-2.4 ms through CHOLMOD and 0.38-0.50 ms here (dpotrf alone:
-// 0.27-0.30 ms); the 1188-DOF one of 40x20x20 about 28 ms against 14-17 ms (dpotrf: 10 ms).
+// costs a large part of the factorization (the coarse operators of global hierarchies are
+// dense), and CHOLMOD's own work on a small dense matrix (symbolic analysis, permuted transposes,
+// supernode bookkeeping) costs several times its flops: the 243-DOF coarsest operator of the
+// 32x8x8 beam takes 0.38-0.50 ms here against 1.6-2.4 ms through CHOLMOD (docs/performance.md).
 constexpr double kDenseFraction = 0.9;
 
 /// Whether over kDenseFraction of A's entries (of its lower triangle if `lower`) are stored.
@@ -384,19 +378,16 @@ void check_dense_values(const Matrix& D, const std::string& where) {
 // (omp_get_max_threads: --threads or OMP_NUM_THREADS, else all cores), unless the user set
 // OPENBLAS_NUM_THREADS. The two pools take turns: no OpenMP region runs inside a factorization, and
 // idle OpenBLAS threads spin for at most about 0.1 s (2^28 cycles, OpenBLAS's default) before
-// sleeping. On an idle 2-core machine, 2 threads took the factorize phase of
-// bench/ccx_vs_coarsegrain.py's problem from 3.93 s to 2.56 s (an earlier measurement on the
-// 56K-DOF demo found one thread as fast: 2.0 s against 2.0-2.2 s). OpenBLAS threads spin while they
-// wait for work, and each BLAS call waits for its slowest thread: on a machine whose cores are busy
-// with other jobs 2 threads are slower than one (that factorization, load average 6 on 2 cores:
-// median 4.3 s against 3.3 s, bench_spd_ordering; the 56K-DOF demo under ctest -j: 24-49 s
-// against 4.7 s), so such runs should pass --threads 1. The OpenMP build of OpenBLAS
-// (libopenblas0-openmp, which would share coarsegrain's OpenMP pool) is not a cure: under the same
-// load its 2-thread factorization took 36 s (1 thread: 3.5-4.0 s), so setup.sh keeps the pthreads
-// build. Other BLAS libraries (no openblas_set_num_threads symbol) are left alone. Inside an OpenMP
-// parallel region (the hierarchy's localized solves: one factorization per thread) BLAS gets one
-// thread: with OpenMP's count, the 2 threads' concurrent factorizations each woke both OpenBLAS
-// threads (24x12x12 hex checker, rho = 5, 2 threads: localized solves 25.6 s, 18.5 s with one).
+// sleeping. On an idle 2-core machine 2 threads factorize bench/ccx_vs_coarsegrain.py's problem
+// in 2.56 s against 3.93 s on one. OpenBLAS threads spin while they wait for work, and each BLAS
+// call waits for its slowest thread, so on a machine whose cores are busy with other jobs 2
+// threads are slower than one and such runs should pass --threads 1; the OpenMP build of
+// OpenBLAS (libopenblas0-openmp, which would share coarsegrain's OpenMP pool) is slower still
+// under load, so setup.sh keeps the pthreads build (docs/performance.md, "BLAS threads"). Other
+// BLAS libraries (no openblas_set_num_threads symbol) are left alone. Inside an OpenMP parallel
+// region (the hierarchy's localized solves: one factorization per thread) BLAS gets one thread:
+// with OpenMP's count, the 2 threads' concurrent factorizations each woke both OpenBLAS threads
+// (localized solves of the 24x12x12 hex checker, rho = 5: 25.6 s against 18.5 s).
 void match_blas_threads(bool serial) {
     static const bool user_set = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
     if (user_set) return;

@@ -54,10 +54,9 @@ struct Reconstruction {
 
 /// The linear map that carries a coarse displacement to the fine DOFs: a sparse matrix (the
 /// effective tensors' barycentric or linearized harmonic map, the baselines), or a function that
-/// applies it without forming it (mra: Φ^{1,T} S, level by level through the C̃^k. Forming Φ^1
-/// of a three-level hierarchy after global solves on 64x16x16 hexes, 1275 x 55488 and nearly
-/// dense, took 80-110 s and raised the run's peak from 6.8 to 9.7 GB; applying it takes
-/// milliseconds).
+/// applies it without forming it (mra: Φ^{1,T} S, level by level through the C̃^k: Φ^1 of three
+/// levels after global solves on 64x16x16 hexes is 1275 x 55488 and nearly dense, 80-110 s and
+/// 2.9 GB of peak to form, while applying it takes milliseconds).
 class FineMap {
   public:
     using Apply = std::function<Vector(const Vector&)>;

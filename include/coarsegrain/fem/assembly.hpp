@@ -18,10 +18,8 @@ enum class MassType { Lumped, Consistent };
 /// - other meshes: element matrices are computed on the fly and scattered by an owner-computes
 ///   partition of the nodes into contiguous ranges (race free, cache friendly), or by greedy
 ///   element colouring when the node numbering has no locality.
-/// Measured (bench/bench_assembly.cpp, Release, 2 cores shared with other jobs), 64^3 hexes
-/// with two materials (262,144 elements, 823,875 DOFs, 64.7M stored entries): 0.40 s on the
-/// grid (0.65 s on 1 core), mostly writing the entries; 0.80 s for the same mesh distorted;
-/// 0.53 s for 1.57M distorted tets.
+/// 64^3 hexes (823,875 DOFs) assemble in 0.40 s on 2 cores, mostly writing the entries
+/// (bench/bench_assembly.cpp; docs/performance.md, "Assembly").
 /// @throws Error if the materials do not match the mesh, or an element is inverted/degenerate
 ///         (the message names the element)
 SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats);

@@ -10,7 +10,35 @@
 
 namespace coarsegrain::mra {
 
-enum class DirichletTreatment { Eliminate, Penalty, DiagonalPenalty, Constrain, Ignore };
+/// How the Dirichlet conditions enter the hierarchy (Secs. 1, 3.1, 5.4). Errors and condition
+/// numbers of each: docs/mra-localization.md, "Dirichlet conditions".
+enum class DirichletTreatment {
+    /// The fixed DOFs are removed from the fine operator, and coarse nodes on the fixed boundary
+    /// lose their DOFs: exact and well conditioned, but the coarsest space is poorer.
+    Eliminate,
+    /// The fixed DOFs are kept with Options::penalty (1e8, as the authors' code) added to their
+    /// diagonal entries. The result depends on the penalty relative to the stiffness (the coarse
+    /// solution does not vanish at fixed nodes when E is large), and cond(A^1) grows with it.
+    Penalty,
+    /// As Penalty with penalty * K_ii, independent of the material scale.
+    DiagonalPenalty,
+    /// The fixed DOFs are removed as in Eliminate, but coarse nodes on the fixed boundary keep
+    /// their canonical measurement functions restricted to the free DOFs (refinement_operators
+    /// with keep_boundary_rows): the limit of the penalty as it tends to infinity, the same richer
+    /// coarse space, exactly zero at the fixed DOFs, without the penalty's conditioning. With Dirac
+    /// refinement the restricted rows vanish and Constrain coincides with Eliminate.
+    Constrain,
+    /// The boundary-blind construction the paper improves on (Chen et al. 2018; Sec. 1, Fig. 12):
+    /// the hierarchy is built on the fine operator without any condition (fixed DOFs kept, no
+    /// penalty; B^k stays definite, as rigid motions are not in ker C^k, and every A^k has exactly
+    /// the rigid motions in its kernel), and a level is constrained only when it is solved: its
+    /// DOFs at the position of a fixed finest DOF (fixed_positions) are held at zero. The basis
+    /// functions do not vanish at the other fixed finest DOFs, so the coarse model is wrong near
+    /// the fixed boundary: too stiff with linear refinement (Fig. 12's "spurious structural
+    /// rigidity"), too soft with Dirac. Single-level solves only (MultilevelSolver::solve_levels
+    /// needs m = 1).
+    Ignore,
+};
 
 /// Grid on which the localization radius rho counts rings (Sec. 3.5).
 enum class RadiusGrid {
@@ -27,7 +55,8 @@ enum class Localization {
     /// stiffness of the fine elements inside T (sum_T A_T = A^q); each R^T is solved on the
     /// wavelets within rho rings of T and Z = sum_T Z^T. Needs the element materials. With the
     /// linear refinement C^† is replaced by a sparse left inverse that reproduces rigid motions
-    /// (then the corrections of a rigid motion cancel cell by cell); see the table above.
+    /// (then the corrections of a rigid motion cancel cell by cell). Measured against Node:
+    /// docs/mra-localization.md, "Cell-wise localization".
     Cell,
 };
 
@@ -38,7 +67,8 @@ enum class Measurement {
     /// measurements are values at single nodes): each fine node's share
     /// of a coarse measurement is scaled by its local stiffness, so that a coarse node measures
     /// mainly the stiff material around it. Coarser steps compose these measurements with the
-    /// canonical C^k, so the hierarchy stays nested. See "Stiffness-weighted measurements".
+    /// canonical C^k, so the hierarchy stays nested. Measured: docs/mra-localization.md,
+    /// "Stiffness-weighted measurements".
     Stiffness,
 };
 
@@ -65,8 +95,8 @@ struct Options {
     /// solves make C̃ A^{k+1} W^T = 0 (Eq. 12) hold only on each region's wavelets. With a
     /// tolerance, each region starts at its step's radius and doubles it until the relative
     /// defect of its rows, ||(C̃ A W^T)[r, :]|| / ||(C^† A W^T)[r, :]||, is at most the
-    /// tolerance, or the radius reaches max_radius, or the region covers the grid. See
-    /// "Defect-driven radius" above.
+    /// tolerance, or the radius reaches max_radius, or the region covers the grid. Measured:
+    /// docs/mra-localization.md, "Defect-driven radius".
     double defect_tolerance = 0;
     /// Largest radius of the defect-driven growth (same grid as radius).
     double max_radius = 16;
@@ -82,8 +112,8 @@ struct Options {
     /// With patch > 1, each node keeps from its patch's solution only the wavelets within its
     /// own rho rings (zeroes the rest), so its basis function has the support of patch 1: C̃
     /// and A^k as sparse as with patch 1, for patch^dim fewer factorizations. The clipped rows
-    /// no longer minimize the energy on their support; see "Clipped patches" above for what that
-    /// costs each refinement.
+    /// no longer minimize the energy on their support; what that costs each refinement:
+    /// docs/mra-localization.md, "Clipped patches".
     bool patch_clip = false;
     /// Node- or cell-wise localization (finite radii only; Cell needs the Eliminate, Constrain
     /// or Ignore treatment, whose fine operator is the sum of the element matrices, and no
@@ -93,15 +123,12 @@ struct Options {
     /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, the d
     /// entries of a row i of C̃ at the DOFs of one level-(k+1) node j (a row of the paper's d x d
     /// coefficient C̃_ij) are dropped together if all of them are below tau max_l |C̃_il|
-    /// (relative to the largest coefficient of the same basis function). Dropping entries one
-    /// by one instead left a node's columns with different patterns: on 24^3 hexes (Dirac, rho
-    /// = 5) it dropped 1.0% of C̃'s entries against 0.03% by nodes, but C̃'s run storage took
-    /// 210.7 MB against 206.5 MB and A^1 1.75 s against 1.47 s (the grouped product takes a
-    /// node's columns at once only where they share a pattern). A^k = C̃^k A^{k+1} C̃^{k,T} is then
-    /// the exact Galerkin matrix of the truncated basis and is not truncated itself: dropping its
-    /// small entries perturbs its near-null space (measured on the 32x32 hung square after global
-    /// solves: tau = 1e-7 on A^k raised the coarsest error by 6%, tau = 1e-4 made A^1 indefinite).
-    /// Default 1e-7: C̃ of global solves 35-63% sparser at an unchanged error (see the table above).
+    /// (relative to the largest coefficient of the same basis function), so that a node's columns
+    /// keep one pattern, which the Galerkin product takes at once. A^k = C̃^k A^{k+1} C̃^{k,T} is
+    /// then the exact Galerkin matrix of the truncated basis and is not truncated itself: dropping
+    /// its small entries perturbs its near-null space (tau = 1e-4 on A^k made A^1 of the 32x32
+    /// hung square indefinite). Default 1e-7: C̃ of global solves 35-63% sparser at an unchanged
+    /// error (docs/mra-localization.md).
     double truncation = 1e-7;
     /// Translation and rotation invariance correction of C̃ (Sec. 3.5), applied after truncation
     /// so that it holds exactly.

@@ -15,9 +15,8 @@ namespace coarsegrain::mra {
 /// order. In C̃^k a group is the dim columns of a fine node (its 3x3 blocks C̃_ij, Sec. 3.1) and
 /// a run the coarse DOFs of the nodes along x whose regions hold it. Measured at Table 1's
 /// setting (40x20x20 hexes, rho = 5 fine rings, truncation 1e-7): C̃^1 takes 8.6 bytes per
-/// entry against CSC's 12 (190 against 266 MB; the truncation's holes split some runs and
-/// groups: 8.50 against 8.26 bytes with and without it on a 16x8x8 grid at rho = 3). A matrix
-/// of short runs and single-column groups can take more than CSC (up to 16 bytes per entry).
+/// entry against CSC's 12 (190 against 266 MB). A matrix of short runs and single-column groups
+/// can take more than CSC (up to 16 bytes per entry).
 /// Products are dense along the runs.
 class RunMatrix {
   public:

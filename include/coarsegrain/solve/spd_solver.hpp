@@ -56,8 +56,7 @@ struct SolverOptions {
     /// with an Error naming the sizes, instead of the operating system killing the process
     /// partway through the factorization. 0 (default): the memory available at analysis time
     /// (MemAvailable in /proc/meminfo; no limit where it cannot be read), checked for factors
-    /// of 64 MB and more. bench_mra on 64^3 hexes at rho = 5 was killed at 24.3 GB that way:
-    /// its fine factorization (811,200 DOFs, 19.4 GB predicted) beside the 7.4 GB hierarchy.
+    /// of 64 MB and more (the fine factorization of 64^3 hexes, 811,200 DOFs, needs 19.4 GB).
     double max_factor_bytes = 0;
 };
 
@@ -72,10 +71,9 @@ struct FactorStats {
 
 /// Dense Cholesky factorization A = L L^T by LAPACK (dpotrf: OpenBLAS's blocked, multithreaded
 /// one through Debian's liblapack.so.3; one BLAS thread inside an OpenMP parallel region).
-/// Measured against Eigen's LLT (dpotrf alone, a copy of the matrix included): 600 unknowns,
-/// one thread, 5.2-5.4 ms against 10.6-10.9 ms; 1188 unknowns 17.5-18.3 ms against 50-55 ms,
-/// and 10-11 ms on 2 threads (Eigen's stays on one). No checks of symmetry or definiteness
-/// beyond LAPACK's pivots.
+/// About 3x faster than Eigen's LLT from 1000 unknowns (1188 unknowns, one thread: 17.5-18.3 ms
+/// against 50-55 ms; docs/performance.md). No checks of symmetry or definiteness beyond
+/// LAPACK's pivots.
 class DenseCholesky {
   public:
     /// Factorizes A (its lower triangle is read). Returns 0 on success, else the order of the
