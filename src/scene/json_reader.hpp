@@ -102,14 +102,12 @@ public:
 
     template <class... Args>
     void fail_unless(bool ok, fmt::format_string<Args...> f, Args&&... args) const {
-        if (!ok)
-            detail::fail<InvalidScene>(fmt::format("{}: {}: {}", m_source, m_path,
-                                                   fmt::format(f, std::forward<Args>(args)...)));
+        if (!ok) fail(f, std::forward<Args>(args)...);
     }
+    /// Throws InvalidScene "<source>: <path>: <message>" (no path at the root).
     template <class... Args>
     [[noreturn]] void fail(fmt::format_string<Args...> f, Args&&... args) const {
-        detail::fail<InvalidScene>(fmt::format("{}: {}: {}", m_source, m_path,
-                                               fmt::format(f, std::forward<Args>(args)...)));
+        fail_at(m_path, fmt::format(f, std::forward<Args>(args)...));
     }
 
 private:
@@ -119,8 +117,12 @@ private:
     template <class... Args>
     [[noreturn]] void fail_key(const std::string& key, fmt::format_string<Args...> f,
                                Args&&... args) const {
-        detail::fail<InvalidScene>(fmt::format("{}: {}: {}", m_source, child(key),
-                                               fmt::format(f, std::forward<Args>(args)...)));
+        fail_at(child(key), fmt::format(f, std::forward<Args>(args)...));
+    }
+    [[noreturn]] void fail_at(const std::string& path, const std::string& message) const {
+        detail::fail<InvalidScene>(path.empty()
+                                       ? fmt::format("{}: {}", m_source, message)
+                                       : fmt::format("{}: {}: {}", m_source, path, message));
     }
 
     const nlohmann::json& m_j;

@@ -1,0 +1,157 @@
+// Scene input that used to crash, hang or be misread: each is rejected with a message naming
+// the file and the key.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "coarsegrain/scene/scene.hpp"
+#include "test_util.hpp"
+
+namespace coarsegrain {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+json plate() {
+    return json::parse(R"({
+      "mesh": { "grid": { "min": [0, 0], "max": [2, 1], "cells": [4, 2], "element": "quad" } },
+      "materials": { "1": { "E": 100, "nu": 0.3, "density": 1 } },
+      "dirichlet": [ { "box": { "min": [-1, -1], "max": [0, 2] } } ],
+      "loads": { "gravity": [0, -1] }
+    })");
+}
+
+scene::Scene parse_text(const std::string& text) {
+    return scene::parse_scene(scene::parse_json(text, "s.json"), "s.json", "");
+}
+
+TEST(SceneInput, GridSizesAreCheckedIn64BitBeforeAnyAllocation) {
+    // (65535 + 1)^2 nodes overflowed the 32-bit node count (a crash); 46341^2 and 1291^3 cells
+    // gave negative sizes; 2^32 + 1 was narrowed to 1.
+    const struct {
+        std::vector<std::int64_t> cells;
+        const char* element;
+        const char* message;
+    } cases[] = {
+        {{65535, 65535}, "quad", "mesh.grid.cells: 4294967296 nodes make 8589934592 DOFs"},
+        {{46341, 46341}, "quad", "more than the 2147483647 that 32-bit indices hold"},
+        {{1291, 1291, 1291}, "hex", "mesh.grid.cells: 2156689088 nodes make 6470067264 DOFs"},
+        {{4294967297, 8}, "quad", "mesh.grid.cells[0]: expected an integer in [1, 100000], got "
+                                  "4294967297"},
+        {{-3, 8}, "quad", "mesh.grid.cells[0]: expected an integer in [1, 100000], got -3"},
+    };
+    for (const auto& c : cases) {
+        json j = plate();
+        const bool three = c.cells.size() == 3;
+        j["mesh"]["grid"] = {{"min", three ? json{0, 0, 0} : json{0, 0}},
+                             {"max", three ? json{1, 1, 1} : json{1, 1}},
+                             {"cells", c.cells},
+                             {"element", c.element}};
+        test::expect_error([&] { scene::parse_scene(j, "s.json", ""); }, c.message);
+    }
+    // A grid that fits the indices but no machine: 600^3 hexes (651M DOFs) need about 633 GB of
+    // stiffness.
+    json j = plate();
+    j["mesh"]["grid"] = {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}, {"cells", {600, 600, 600}}};
+    test::expect_error([&] { scene::parse_scene(j, "s.json", ""); }, "GB, more than this machine");
+}
+
+TEST(SceneInput, DuplicateKeysAreRejectedWithTheirPath) {
+    test::expect_error(
+        [] {
+            parse_text(R"({"materials": {"0": {"E": 100, "nu": 0.3, "density": 1},
+                                         "0": {"E": 5, "nu": 0.3, "density": 1}}})");
+        },
+        "s.json: materials.0: the key is given twice");
+    test::expect_error([] { parse_text(R"({"dirichlet": [{"box": {}}, {"box": {"min": 1, "min": 2}}]})"); },
+                       "s.json: dirichlet[1].box.min: the key is given twice");
+    test::expect_error([] { parse_text(R"({"a": [[1, 2], {"b": 1}], "c": {"d": [], "d": 0}})"); },
+                       "s.json: c.d: the key is given twice");
+    // The same key in sibling objects is not a duplicate.
+    EXPECT_EQ(scene::parse_json(R"({"a": {"k": 1}, "b": {"k": 2}, "c": [{"k": 1}, {"k": 2}]})", "s")
+                  .size(),
+              3u);
+}
+
+TEST(SceneInput, MaterialIdsAreCanonicalIntegers) {
+    for (const char* key : {"01", "+1", "1.0", " 1", "x"}) {
+        json j = plate();
+        j["materials"] = {{key, {{"E", 100}, {"nu", 0.3}, {"density", 1}}}};
+        test::expect_error([&] { scene::parse_scene(j, "s.json", ""); },
+                           fmt::format("s.json: materials.{}: material keys must be integer ids",
+                                       key));
+    }
+}
+
+TEST(SceneInput, NumbersBeyondDoubleRangeAreInvalidJson) {
+    test::expect_error([] { parse_text(R"({"loads": {"gravity": [0, 0, 1e400]}})"); },
+                       "s.json: not valid JSON");
+}
+
+TEST(SceneInput, FilesMustBeRegular) {
+    const std::string dir = test::temp_dir("scene_files");
+    const std::string fifo = dir + "/fifo.raw";
+    fs::remove(fifo);
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    // A FIFO or /dev/zero used to be read whole (forever) before any size check.
+    for (const std::string& file : {std::string("/dev/zero"), fifo, dir}) {
+        json j = plate();
+        j["dimension"] = 3;
+        j["mesh"]["grid"] = {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}, {"cells", {2, 2, 2}}};
+        j["material_field"] = {{"voxels", {{"file", file}, {"dims", {2, 2, 2}}}}};
+        test::expect_error([&] { scene::parse_scene(j, "s.json", ""); },
+                           "s.json: material_field.voxels.file: " + file +
+                               " is not a regular file");
+        json m = plate();
+        m["mesh"] = {{"file", file}};
+        test::expect_error([&] { scene::parse_scene(m, "s.json", ""); },
+                           "s.json: mesh.file: " + file + " is not a regular file");
+    }
+    json j = plate();
+    j["dimension"] = 3;
+    j["mesh"]["grid"] = {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}, {"cells", {2, 2, 2}}};
+    j["material_field"] = {{"voxels", {{"file", "nonexist.raw"}, {"dims", {2, 2, 2}}}}};
+    test::expect_error([&] { scene::parse_scene(j, "s.json", dir); },
+                       "s.json: material_field.voxels.file: file " + dir +
+                           "/nonexist.raw does not exist");
+    std::ofstream(dir + "/short.raw") << "abc";
+    j["material_field"]["voxels"]["file"] = "short.raw";
+    test::expect_error([&] { scene::parse_scene(j, "s.json", dir); },
+                       "short.raw has 3 bytes, expected 2x2x2 = 8 (one byte per voxel)");
+    test::expect_error([] { scene::load_scene("/dev/zero"); },
+                       "cannot open scene file /dev/zero: not a regular file");
+}
+
+TEST(SceneInput, PlaneAppliesToIsotropic2DMaterialsOnly) {
+    json j = plate();
+    j["plane"] = "stress";
+    j["materials"]["1"] = {{"C_voigt", {{10, 3, 0}, {3, 10, 0}, {0, 0, 4}}}, {"density", 1}};
+    test::expect_error([&] { scene::parse_scene(j, "s.json", ""); },
+                       "s.json: plane: applies to isotropic materials (E, nu) only, but material "
+                       "1 is anisotropic");
+    json k = plate();
+    k["plane"] = "strain";
+    k["mesh"]["grid"] = {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}, {"cells", {1, 1, 1}}};
+    k["dirichlet"][0]["box"] = {{"min", {-1, -1, -1}}, {"max", {0, 2, 2}}};
+    k["loads"]["gravity"] = {0, 0, -1};
+    test::expect_error([&] { scene::parse_scene(k, "s.json", ""); },
+                       "s.json: plane: applies to 2D scenes only");
+}
+
+TEST(SceneInput, RootLevelErrorsNameNoEmptyKey) {
+    json j = plate();
+    j.erase("materials");
+    try {
+        scene::parse_scene(j, "plate.json", "");
+        FAIL() << "expected an error";
+    } catch (const Error& e) {
+        EXPECT_THAT(e.what(), ::testing::StartsWith("plate.json: no materials"));
+    }
+}
+
+}  // namespace
+}  // namespace coarsegrain
