@@ -127,9 +127,16 @@ TEST(CliDemoSlow, ComparesEveryMethodAndWritesTheReport) {
     }
     EXPECT_NO_THROW(io::read_vtu(dir + "/solution_fine.vtu"));
     // Sane figures: the effective tensors beat the naive average in the l2 norm (barycentric
-    // carry-over, DESIGN.md), both refinements of the hierarchy in the energy norm, and linear
-    // is more accurate than Dirac (Chen 2019, Fig. 9).
+    // carry-over, docs/guide.md), both refinements of the hierarchy in the energy norm, and
+    // linear is more accurate than Dirac (Chen 2019, Fig. 9).
     const double naive_l2 = row["naive"]["l2_rel"], naive_energy = row["naive"]["energy_rel"];
+    // The hierarchy's coarse models are Galerkin projections of the fine problem: compliance
+    // ratio 1 - energy_rel^2 <= 1 (1e-9: round-off of the solves).
+    for (const char* mra : {"mra-linear", "mra-dirac"}) {
+        const double e = row[mra]["energy_rel"], ratio = row[mra]["compliance_ratio"];
+        EXPECT_NEAR(ratio, 1.0 - e * e, 1e-9) << mra;
+        EXPECT_LE(ratio, 1.0 + 1e-9) << mra;
+    }
     EXPECT_LT(row["effective-tensor"]["l2_rel"].get<double>(), naive_l2);
     EXPECT_LT(row["mra-dirac"]["energy_rel"].get<double>(), naive_energy);
     EXPECT_LT(row["mra-linear"]["energy_rel"].get<double>(),

@@ -79,15 +79,30 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
         EXPECT_EQ(L["cells"], json::array({cells[i], cells[i]}));
         EXPECT_GT(number(L, "dofs"), 0);
         EXPECT_GT(number(L, "A_nnz"), 0);
-        for (const char* key : {"sparsity_A", "error_over_g", "error_over_u"}) {
-            EXPECT_GE(number(L, key), 0.0) << key;
-            EXPECT_LT(number(L, key), 1.0) << key;
-        }
         EXPECT_GT(number(L, "bytes_A"), 0);
-        EXPECT_GE(number(L, "build_seconds"), 0.0);
+        EXPECT_TRUE(L["build_seconds"].is_number());
         for (const char* key : {"energy_rel", "energy_over_load", "l2_rel", "max_displacement_rel",
                                 "compliance_ratio"})
             EXPECT_TRUE(L["errors"][key].is_number()) << key;
+        // Every level is a Galerkin projection of the fine problem (the "constrain" treatment
+        // keeps A^k = Φ^k K Φ^{k,T} and g^k = Φ^k f): u^k is the K-orthogonal projection of u,
+        // so ||u - u^k||_K^2 = ||u||_K^2 - ||u^k||_K^2 and f.u^k = ||u^k||_K^2, that is
+        // compliance_ratio = 1 - energy_rel^2 <= 1. 1e-9 absolute: the round-off of the solves,
+        // which shows in the fine level solved twice (compliance ratio 1 + 2e-11 here).
+        const double energy_rel = L["errors"]["energy_rel"].get<double>();
+        const double compliance_ratio = L["errors"]["compliance_ratio"].get<double>();
+        EXPECT_NEAR(compliance_ratio, 1.0 - energy_rel * energy_rel, 1e-9);
+        EXPECT_LE(compliance_ratio, 1.0 + 1e-9);
+        EXPECT_GE(energy_rel, 0.0);
+        EXPECT_LE(energy_rel, 1.0);
+        // error_over_g is the same error over |g| instead of ||u||_K (NOTES.md, "Error
+        // metric"): on every level the two differ by the same factor ||u||_K / |g| of the fine
+        // problem (1e-9 relative: the round-off of the solves as above).
+        if (i + 1 < levels.size()) {
+            EXPECT_NEAR(number(L, "error_over_g") / number(L, "error_over_u"),
+                        number(levels[0], "error_over_g") / number(levels[0], "error_over_u"),
+                        1e-9 * number(L, "error_over_g") / number(L, "error_over_u"));
+        }
         ASSERT_EQ(L["probes"].size(), 2u);
         EXPECT_EQ(L["probes"][0]["u"].size(), 2u);
         const std::string vtu = dir + "/out/" + L["vtu"].get<std::string>();
@@ -96,8 +111,19 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
         EXPECT_EQ(mesh.num_nodes(), 17 * 17);
         EXPECT_FALSE(fields.point_data.empty());
         if (i + 1 < levels.size()) {
-            EXPECT_GE(number(L, "sparsity_B"), 0.0);  // B^1 and B^2 are dense
-            EXPECT_GE(number(L, "sparsity_C"), 0.0);
+            // Global solves without truncation ("truncation": 0 in the scene): Z = -B^{-1} R is
+            // a dense solve, so C̃^k and the operators built from it, A^k and (below the finest
+            // step) B^k = W A^{k+1} W^T, are dense. A handful of entries can still come out
+            // exactly zero (measured 4.5e-5 of C̃^3); with the default truncation 1e-7, 0.8% of
+            // C̃^3 would be dropped, so this also checks that the scene's truncation reached the
+            // construction. B^3 = W K W^T is sparse (W is local).
+            EXPECT_LT(number(L, "sparsity_C"), 1e-3);
+            EXPECT_LT(number(L, "sparsity_A"), 1e-3);
+            if (i + 2 < levels.size()) {
+                EXPECT_LT(number(L, "sparsity_B"), 1e-3);
+            } else {
+                EXPECT_GT(number(L, "sparsity_B"), 0.5);
+            }
             EXPECT_GT(number(L, "bytes_Phi"), 0);
             // Nested Galerkin spaces (span Φ^k ⊂ span Φ^{k+1}): the energy error cannot grow
             // towards the fine level, and on this contrast it strictly drops (1e-12 absolute
@@ -114,6 +140,8 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
         } else {
             // Level q is the fine solve: equal to the runtime's fine solution up to the
             // round-off of two factorizations of the same matrix (1e-9 relative).
+            // The fine stiffness is sparse: a 2D Q1 node couples to at most 9 nodes.
+            EXPECT_GT(number(L, "sparsity_A"), 1.0 - 18.0 / 544);
             EXPECT_LT(L["errors"]["energy_rel"].get<double>(), 1e-9);
             EXPECT_LT(L["errors"]["l2_rel"].get<double>(), 1e-9);
             EXPECT_NEAR(L["errors"]["compliance_ratio"].get<double>(), 1.0, 1e-9);
@@ -139,9 +167,8 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
         EXPECT_NEAR(s["errors"][key].get<double>(), levels[0]["errors"][key].get<double>(),
                     1e-9 * std::abs(s["errors"][key].get<double>()))
             << key;
-    EXPECT_GT(s["speedup"]["factorize_and_solve"].get<double>(), 0.0);
-    EXPECT_GT(s["fine"]["timings"]["solve"].get<double>(), 0.0);
-    EXPECT_GE(s["coarse"]["timings"]["compare"].get<double>(), 0.0);
+    EXPECT_TRUE(s["fine"]["timings"]["solve"].is_number());
+    EXPECT_TRUE(s["coarse"]["timings"]["compare"].is_number());
 
     // CSV: header and one row per level.
     std::ifstream csv(dir + "/out/mra_levels.csv");
@@ -162,9 +189,18 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
     const json& cc = s["coarse"]["coarsest_cells"];
     EXPECT_EQ(cc["cells"], 4);
     ASSERT_EQ(cc["per_cell"].size(), 4u);
-    // Every cell's modulus lies between the layers' (Voigt/Reuss-like bounds of the mixture).
-    EXPECT_GT(cc["E_min"].get<double>(), 100.0);
-    EXPECT_LT(cc["E_max"].get<double>(), 5e6 / (1 - 0.3 * 0.3) * 1.5);
+    // Reuss bound: a cell's tensor is the inverse of its compliance under uniform-stress
+    // tractions as a free body, computed in a Galerkin subspace of the fine FE space, so
+    // S_cell <= S_fine (Galerkin) <= S_continuum <= <C^{-1}> (complementary energy: the
+    // uniform stress is statically admissible). Each coarsest cell is half soft, half stiff;
+    // with one Poisson ratio the Reuss tensor is isotropic with E_R = 1 / <1/E>, so every
+    // directional modulus is at least E_R / (1 - nu^2) (plane strain; measured E_min 249
+    // against 220). 1e-8 relative: the round-off of the cell's solves (MraCellTensors). No
+    // upper bound: the coarse cell's Galerkin space does not contain the uniform strains, so
+    // it may exceed the Voigt mean.
+    const double E_reuss = 1.0 / (0.5 / 100.0 + 0.5 / 5e6) / (1 - 0.3 * 0.3);
+    EXPECT_GE(cc["E_min"].get<double>(), E_reuss * (1 - 1e-8));
+    EXPECT_GE(cc["E_max"].get<double>(), cc["E_min"].get<double>());
     const auto [cmesh, cfields] = io::read_vtu(dir + "/out/coarsest_cells.vtu");
     EXPECT_EQ(cmesh.num_elements(), 4);
     std::vector<std::string> names;
@@ -218,8 +254,16 @@ TEST(CliCoarsenMra, CoarsestStressTable) {
         EXPECT_TRUE(v[3] == 100 || v[3] == 5e6) << line;  // the layers' E
         norm2 += v[2] * frobenius2(v[4], v[5], v[6]);
         diff2 += v[2] * frobenius2(v[8] - v[4], v[9] - v[5], v[10] - v[6]);
-        EXPECT_GE(v[7], 0.0);
-        EXPECT_GE(v[11], 0.0);
+        // Von Mises from the printed components: plane strain with nu = 0.3 in both layers,
+        // so sigma_zz = nu (sigma_xx + sigma_yy). 1e-7 of the stress's magnitude: the table's
+        // 9 significant digits.
+        for (const int c : {4, 8}) {
+            const double xx = v[c], yy = v[c + 1], xy = v[c + 2], zz = 0.3 * (xx + yy);
+            const double vm = std::sqrt(
+                0.5 * ((xx - yy) * (xx - yy) + (yy - zz) * (yy - zz) + (zz - xx) * (zz - xx)) +
+                3 * xy * xy);
+            EXPECT_NEAR(v[c + 3], vm, 1e-7 * std::sqrt(frobenius2(xx, yy, xy))) << line;
+        }
         ++rows;
     }
     EXPECT_EQ(rows, 256);  // 16 x 16 quads
@@ -279,8 +323,13 @@ TEST(CliCoarsenMra, MaterialFromPngImage) {
     const json s = run_mra(scene, dir);
     ASSERT_EQ(s["coarse"]["levels"].size(), 4u);
     EXPECT_LT(s["coarse"]["levels"][3]["errors"]["energy_rel"].get<double>(), 1e-9);
-    EXPECT_GT(s["errors"]["energy_rel"].get<double>(), 0.0);
-    EXPECT_LT(s["errors"]["energy_rel"].get<double>(), 1.0);
+    // A Galerkin projection (see PerLevelSummaryFilesAndPlots): energy error in (0, 1) and
+    // compliance ratio 1 - energy_rel^2, to the solves' round-off (1e-9).
+    const double energy_rel = s["errors"]["energy_rel"].get<double>();
+    EXPECT_GT(energy_rel, 0.0);
+    EXPECT_LT(energy_rel, 1.0);
+    EXPECT_NEAR(s["errors"]["compliance_ratio"].get<double>(), 1.0 - energy_rel * energy_rel,
+                1e-9);
     // The image's two moduli reach the fine model: E in solution_fine.vtu spans both.
     const auto [mesh, fields] = io::read_vtu(dir + "/out/solution_fine.vtu");
     for (const auto& f : fields.cell_data)

@@ -67,12 +67,12 @@ TEST(ExamplesSlow, CheeseWheelHoleySideSagsMoreOnTheCoarseMesh) {
     // The whole wheel: the effective tensors are closer to the fine solution than the averages
     // (l2 0.179 against 0.264, compliance ratio 0.851 against 0.762, measured). Neither reaches
     // 1: the 200 linear tets are themselves too stiff (a hole-free wheel on the same coarse mesh,
-    // with the exact cheese tensor, has a compliance ratio of 0.79 at the example's size).
-    EXPECT_LT(run.error("effective-tensor", "l2_rel"), 0.22);
+    // with the exact cheese tensor, has a compliance ratio of 0.79 at the example's size), so
+    // the comparison with the averages on the same mesh is what is asserted, with margins (0.8,
+    // 0.05) below the measured gaps (0.68, 0.09).
     EXPECT_LT(run.error("effective-tensor", "l2_rel"), 0.8 * run.error("naive", "l2_rel"));
     EXPECT_GT(run.error("effective-tensor", "compliance_ratio"),
               run.error("naive", "compliance_ratio") + 0.05);
-    EXPECT_NEAR(run.error("effective-tensor", "compliance_ratio"), 0.85, 0.05);
 }
 
 }  // namespace

@@ -60,18 +60,25 @@ double stress_best_baseline_l2(const ExampleRun& r) {
 void expect_soft_matrix_stress_on_one_element(const std::string& example) {
     const ExampleRun r = run_example(
         example, {{"mesh", {{"grid", {{"cells", {32, 32}}}}}}, {"coarse", {{"levels", 6}}}});
-    EXPECT_LT(r.error("mra-dirac", "energy_rel"), 0.025) << example;
-    EXPECT_NEAR(r.error("mra-dirac", "compliance_ratio"), 1.0, 1e-3) << example;
-    EXPECT_LT(r.error("mra-linear", "energy_rel"), 0.35) << example;
-    // The Dirac coarse solve against every baseline on the same 4 nodes, in l2.
-    EXPECT_LT(r.error("mra-dirac", "l2_rel"), 0.01 * stress_best_baseline_l2(r)) << example;
-    // Fig. 16's claim, in the soft matrix: the coarsest level's stress there is the fine one.
+    // Both hierarchies are Galerkin projections (compliance ratio 1 - energy_rel^2) whose error
+    // falls level by level (nested spaces). 1e-7: a contrast of 1e6 on 32 x 32 cells makes
+    // cond(K) ~1e9, and the identity's round-off measured up to 2.3e-9 (against ~1e-11 at
+    // contrast 5e4).
+    for (const char* mra : {"mra-dirac", "mra-linear"}) {
+        expect_galerkin_projection(r, mra, 1e-7);
+        expect_error_falls_with_level(r, mra);
+    }
+    // The coarse solves against every baseline on the same 4 nodes, in l2: Dirac far better
+    // (measured 4e-4 and 3e-4 against at least 0.18), linear better too.
+    const double best_baseline = stress_best_baseline_l2(r);
+    EXPECT_LT(r.error("mra-dirac", "l2_rel"), 0.01 * best_baseline) << example;
+    EXPECT_LT(r.error("mra-linear", "l2_rel"), best_baseline) << example;
+    // Fig. 16's claim, in the soft matrix: the coarsest level's stress there is the fine one
+    // (no visible difference in the paper's figure; asserted: 0.5% in L2).
     EXPECT_LT(stress_soft_error(r, "mra-dirac"), 0.005) << example;
-    EXPECT_LT(stress_soft_error(r, "mra-linear"), 0.4) << example;
     // Not in the stiff phase: there stress = 1e6 x a strain that is tiny in the fine solution,
     // so the small strain error of the coarse basis dominates the L2 stress error over the
-    // whole square. This documents the finding of the READMEs.
-    EXPECT_GT(r.error("mra-dirac", "stress_rel"), 1.0) << example;
+    // whole square (stress_rel above 1, the READMEs' finding; not asserted).
 }
 
 }  // namespace

@@ -34,10 +34,13 @@ TEST(ExamplesSlow, PinnedBeamMatchesTheFineSagOnlyWithTheClampsInTheBasis) {
     EXPECT_LT(beam_probe_ratio(r, "mra-dirac", 1), 1.0);
     EXPECT_LT(beam_probe_ratio(r, "naive", 1), 0.75);
     // Energy error 0.255 (Dirac) against 0.542 (naive); compliance ratio 0.935 against 0.684.
-    EXPECT_LT(r.error("mra-dirac", "energy_rel"), 0.3);
+    // The hierarchy's levels are Galerkin projections (compliance ratio 1 - energy_rel^2); the
+    // comparison with the naive model on the same coarse nodes keeps a margin (0.6, measured
+    // 0.47).
+    expect_galerkin_projection(r, "mra-dirac");
+    expect_galerkin_projection(r, "mra-linear");
     EXPECT_LT(r.error("mra-dirac", "energy_rel"), 0.6 * r.error("naive", "energy_rel"));
-    EXPECT_GT(r.error("mra-dirac", "compliance_ratio"), 0.9);
-    EXPECT_LT(r.error("naive", "compliance_ratio"), 0.75);
+    EXPECT_GT(r.error("mra-dirac", "compliance_ratio"), r.error("naive", "compliance_ratio"));
     // Fig. 12: built without the clamps, the hierarchy holds only its coarse nodes on the clamped
     // faces. Linear refinement: spurious rigidity, compliance ratio 0.659 against 0.9999 and
     // energy error 0.367 against 0.0094 with the clamps in the construction (the bounds: 0.75,

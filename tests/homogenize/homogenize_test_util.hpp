@@ -55,16 +55,20 @@ inline Vector solve_coarse(const coarsen::CoarseModel& m) {
     return fem::expand(sys, solver.solve(sys.rhs), m.bc, static_cast<Index>(m.K.rows()));
 }
 
-/// The DESIGN.md error figures of a coarse solution carried to the fine nodes.
+/// The error figures of docs/guide.md (summary.json's `errors`) of a coarse solution carried to
+/// the fine nodes.
 struct Comparison {
-    double l2_rel = 0;            ///< |u_c - u|_2 / |u|_2 over the fine nodes
-    double compliance_ratio = 0;  ///< f·u_c / f·u with the fine load f
+    double l2_rel = 0;             ///< |u_c - u|_2 / |u|_2 over the fine nodes
+    double compliance_ratio = 0;   ///< f·u_c / f·u with the fine load f
+    double coarse_compliance = 0;  ///< f_c·K_c^{-1} f_c, the coarse model's own compliance
 };
 
 inline Comparison compare(const scene::FineModel& fine, const Vector& u_fine,
                           const coarsen::CoarseModel& m) {
-    const Vector u_c = m.to_fine * solve_coarse(m);
-    return {(u_c - u_fine).norm() / u_fine.norm(), fine.f.dot(u_c) / fine.f.dot(u_fine)};
+    const Vector u_coarse = solve_coarse(m);
+    const Vector u_c = m.to_fine * u_coarse;
+    return {(u_c - u_fine).norm() / u_fine.norm(), fine.f.dot(u_c) / fine.f.dot(u_fine),
+            m.f.dot(u_coarse)};
 }
 
 }  // namespace coarsegrain::test

@@ -122,7 +122,9 @@ TEST_P(EffectiveTensorDim, HomogeneousObjectCoarsensToItsOwnTensor) {
     const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
     double worst = 0;
     for (const Mandel6& Cq : c.C) worst = std::max(worst, (Cq.topLeftCorner(n, n) - C).norm());
-    EXPECT_LT(worst, 1e-8 * C.norm());  // the bound; measured ~1e-13
+    // Round-off of the harmonic solves (condition ~1e4 here) carried through Eq. 8's 6x6
+    // products and inverse: measured ~1e-13, bound 1e-8 for other BLAS and orderings.
+    EXPECT_LT(worst, 1e-8 * C.norm());
 }
 
 // ... and its coarse solution is then identical to the naive baseline's (the same tensor on

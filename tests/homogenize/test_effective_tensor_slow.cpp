@@ -33,6 +33,16 @@ std::map<std::string, test::Comparison> compare_methods(const test::Setup& s, co
         out[m] = test::compare(s.fine, u, homogenize::build_coarse_model(s.scene, s.fine, m));
         std::printf("  %-17s %10.4f %12.4f\n", m.c_str(), out[m].l2_rel, out[m].compliance_ratio);
     }
+    // Voigt >= Reuss on every element (arithmetic against harmonic mean of SPD tensors), so
+    // K_voigt >= K_reuss on the same coarse mesh, load and conditions, and the coarse
+    // compliance f_c.K^{-1} f_c of Voigt is at most Reuss's (1e-12: round-off).
+    EXPECT_LE(out["voigt"].coarse_compliance, out["reuss"].coarse_compliance * (1 + 1e-12))
+        << title;
+    // Isotropic materials in 3D: naive = Voigt (the tensor is linear in lambda, mu); 1e-9: the
+    // same coarse system up to the round-off of the averages and solves.
+    EXPECT_NEAR(out["naive"].coarse_compliance, out["voigt"].coarse_compliance,
+                1e-9 * out["voigt"].coarse_compliance)
+        << title;
     return out;
 }
 
@@ -229,7 +239,10 @@ test::Setup layered_cube(double thickness, int n) {
 // and how the coarse solve combines them (not like a volume average) decides the result, as in
 // SpringsInSeriesGiveTheSeriesStiffness on a single cell; the directional Young's modulus of a
 // single tet exceeds the stiffest layer's 50-fold. A limitation of the method, documented
-// in docs/guide.md and asserted here so the documentation stays true.
+// in docs/guide.md from the table this test prints; it is not asserted (an improvement of the
+// method must not fail the test). Asserted: every tensor is positive definite (Eq. 8 of an SPD
+// fine tensor with an invertible mollifier), the effective tensors win on the finer layers
+// (and, in compare_methods, the Voigt model is stiffer than the Reuss one).
 TEST(EffectiveTensorSlow, LayeredCubeParallelToTheClampedFace) {
     struct Case {
         double thickness;
@@ -253,18 +266,12 @@ TEST(EffectiveTensorSlow, LayeredCubeParallelToTheClampedFace) {
         }
         // A single coarse tet can be far stiffer along z than the stiffest layer (E = 1e5):
         // measured 5.4e6 (1/8 layers, 3^3 cells), 2.4e7 (1^3), 3.8e7 (2^3).
-        EXPECT_GT(E_z, 50 * 1e5) << k.thickness << ", " << k.cells;
+        std::printf("  largest E_z of a coarse tet %.3g\n", E_z);
     }
     auto& fine_layers = r[{0.125, 3}];
     for (const char* m : {"naive", "voigt", "reuss"})
         EXPECT_LT(fine_layers["effective-tensor"].l2_rel, fine_layers[m].l2_rel) << m;
     EXPECT_NEAR(fine_layers["effective-tensor"].compliance_ratio, 1.0, 0.05);
-    for (const int n : {1, 2}) {
-        auto& coarse_cells = r[{0.25, n}];
-        EXPECT_LT(coarse_cells["reuss"].l2_rel, coarse_cells["effective-tensor"].l2_rel) << n;
-        EXPECT_GT(coarse_cells["effective-tensor"].compliance_ratio, 1.3) << n;  // too soft
-        EXPECT_LT(coarse_cells["naive"].compliance_ratio, 0.01) << n;            // too stiff
-    }
 }
 
 }  // namespace

@@ -134,8 +134,9 @@ TEST(MraCellLocalizedAccuracy, FarBelowNodeWiseOnTheHungSquare) {
     // correction or truncation, radius 2 fine rings. Measured coarsest energy errors: global
     // 0.109, node-wise 0.963, cell-wise 0.307 (0.881 with the injection C^† instead of the rigid
     // left inverse, 0.237 with the dense Moore-Penrose C^†). Asserted: global <= cell (the
-    // global space is energy-optimal for the measurements, Eq. 9; 1e-9 for round-off) and
-    // cell < 0.4 node.
+    // localized space approximates the global one, whose basis has the least energy for the
+    // measurements, Eq. 9: expected, though for one load not a theorem; 1e-9 for round-off)
+    // and cell < 0.4 node.
     const test::GridProblem p =
         test::hung_problem(2, Eigen::Vector3i(16, 16, 1), 1.0, 100.0, test::checker_pattern);
     const auto error = [&](const Options& o) {
@@ -165,7 +166,9 @@ TEST(MraCellLocalizedAccuracy, ThreeDHomogeneousBlockAgainstTheTrilinearBaseline
     // Measured here (gravity and a traction on the bottom):
     // global 0.0596, node 0.799, cell 0.0683, trilinear 0.187; bench_mra on
     // bench/scenes/homogeneous_block.json at 16^3 (gravity only): 0.0112, 0.694, 0.0217, 0.0759.
-    // Asserted with a factor 2 of margin each way.
+    // Asserted: the comparisons with the trilinear baseline (cell-wise with a factor 2 of
+    // margin) and that the cell-wise space does not beat the global one it approximates.
+    // Node-wise losing to the trilinear FEM is a limitation, printed but not asserted.
     const test::GridProblem p =
         test::hung_problem(3, Eigen::Vector3i(8, 8, 8), 1.0, 1.0, test::checker_pattern);
     Options global = test::exact_options(2, Refinement::Linear);
@@ -186,7 +189,6 @@ TEST(MraCellLocalizedAccuracy, ThreeDHomogeneousBlockAgainstTheTrilinearBaseline
     std::printf("homogeneous 8^3 block: global %.4g, node %.4g, cell %.4g, trilinear %.4g\n",
                 e_global, e_node, e_cell, e_trilinear);
     EXPECT_LT(e_global, e_trilinear);
-    EXPECT_GT(e_node, 2 * e_trilinear);
     EXPECT_LT(e_cell, 0.5 * e_trilinear);
     EXPECT_GE(e_cell, e_global * (1 - 1e-9));
 }

@@ -1,7 +1,10 @@
 // The mra coarsening method's entry point: scene options and the CoarseModel it returns.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 #include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
@@ -47,7 +50,11 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         EXPECT_EQ(m.report["levels"].size(), 2u);
         EXPECT_EQ(m.report["options"]["dirichlet"], "constrain");
         EXPECT_EQ(m.report["options"]["patch_clip"], false);
-        EXPECT_GT(m.timings["level 1: A"] + m.timings["level 2: A"], 0.0);
+        // The build phases are reported per level (their durations are not checked).
+        std::vector<std::string> phases;
+        for (const auto& entry : m.timings.entries()) phases.push_back(entry.first);
+        for (const char* phase : {"level 1: A", "level 2: A"})
+            EXPECT_NE(std::find(phases.begin(), phases.end(), phase), phases.end()) << phase;
 
         // Solving the model as the runtime does (conditions eliminated) gives the hierarchy's
         // single-level solve of level 1.

@@ -28,7 +28,7 @@ void expect_spectrum(const SparseMatrix& M, double lmin, double lmax, double con
     const double dmin = eig.eigenvalues().minCoeff(), dmax = eig.eigenvalues().maxCoeff();
     // Lanczos converged to 1e-12 relative; the dense solver is backward stable (error
     // ~ n eps lambda_max on each eigenvalue, here with cond <= 1e7 at most ~1e-8 relative on
-    // lambda_min for the worst level). 1e-8 relative as the task asks.
+    // lambda_min for the worst level). 1e-8 relative.
     EXPECT_NEAR(lmax, dmax, 1e-8 * dmax) << what;
     EXPECT_NEAR(lmin, dmin, 1e-8 * dmin) << what;
     EXPECT_NEAR(cond, dmax / dmin, 1e-8 * dmax / dmin) << what;

@@ -67,7 +67,7 @@ INSTANTIATE_TEST_SUITE_P(Mra, MraDirichlet,
                                                               Refinement::Linear)),
                          [](const auto& p) { return test::dim_refinement_label(p.param); });
 
-// The setup: a 32x32 bimaterial square (contrast 2000) hung from its top edge under
+// A 32x32 bimaterial square (contrast 2000) hung from its top edge under
 // gravity, coarsened to 2x2 cells (5 levels), global solves. Energy error of the coarsest level
 // relative to the fine solution, and the condition number of A^1.
 TEST(MraDirichletTreatmentsSlow, ConstrainKeepsTheRicherSpaceWithoutThePenalty) {

@@ -22,6 +22,16 @@ test::MaterialPattern layers(double t) {
 // coarsened down to one element (6 levels), global solves. The homogenization error
 // ||u^k - u||_A / ||g||_2 of the single-level solves decreases from coarse to fine (Galerkin
 // projections on nested spaces, Eq. 4), and the linear refinement beats Dirac at every level.
+// Rate: with measurements in L2 (the bilinear hats of the linear refinement) the energy error
+// is O(H ||g||) (Owhadi 2017; the paper's "optimal error decay rate in energy norm"), with a
+// constant that grows with the contrast: the error halves per level once the coarse cells
+// resolve the layers (4 fine cells thick: levels 4 and 5, layers 1 and 2 cells thick), and
+// falls more slowly while they do not. Measured, levels 1..5: linear 0.0895 0.0796 0.0629
+// 0.0412 0.0213 (last step x0.52, the O(H) halving; fitted slope over all levels -0.51 per
+// level), Dirac 0.0980 0.0945 0.0883 0.0876 0.0510. Asserted for the linear refinement: the
+// last step at least H^{3/4} (a factor 2^{-3/4} = 0.59), margin for the constant of the
+// bound. Dirac measurements are not in H^{-1} in 2D, so the theory gives Dirac no rate; only
+// its monotone decrease is asserted.
 TEST(MraHomogenizationSlow, ErrorDecreasesFromCoarseToFineAndLinearBeatsDirac) {
     const test::GridProblem p =
         test::hung_problem(2, Eigen::Vector3i(32, 32, 1), 100.0, 5e6, layers(0.125));
@@ -34,8 +44,9 @@ TEST(MraHomogenizationSlow, ErrorDecreasesFromCoarseToFineAndLinearBeatsDirac) {
             errors[r].push_back(test::energy_norm(p.K, u - p.u) / p.f.norm());
         }
         // Slope of log2(error) against the level (the cell size halves per level), least
-        // squares over the levels; printed only (measured -0.20 for Dirac, -0.51 for linear: the
-        // paper reports similar slopes for both, on its own, unstated, loads).
+        // squares over the levels, printed for comparison with Fig. 9 (measured -0.20 for
+        // Dirac, -0.51 for linear: the paper reports similar slopes for both, on its own,
+        // unstated, loads); the asserted rate is the last step's (see above).
         const auto& e = errors[r];
         const int n = static_cast<int>(e.size());
         double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -53,6 +64,9 @@ TEST(MraHomogenizationSlow, ErrorDecreasesFromCoarseToFineAndLinearBeatsDirac) {
         for (int k = 1; k < n; ++k)
             EXPECT_LT(e[static_cast<std::size_t>(k)], e[static_cast<std::size_t>(k - 1)])
                 << refinement_name(r) << " level " << k + 1;
+        if (r == Refinement::Linear) {
+            EXPECT_LT(e[4], std::pow(2.0, -0.75) * e[3]) << "linear, level 4 to 5";
+        }
     }
     for (std::size_t k = 0; k < errors[Refinement::Linear].size(); ++k)
         EXPECT_LT(errors[Refinement::Linear][k], errors[Refinement::Dirac][k]) << "level " << k + 1;

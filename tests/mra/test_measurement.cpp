@@ -109,7 +109,7 @@ TEST(MraMeasurementLocalized, StiffnessWeightsLocalizeALayeredColumn) {
     // 0.00102, cell-wise 0.603; stiffness global 0.00641, cell-wise 0.00641. The weighted
     // global space is 6x less accurate than the canonical one here: a coarse node measures the
     // stiff layer, and the soft layer's stretching is left to the wavelets. Asserted: the weighted
-    // cell-wise error within 1.5x of its global one (the criterion) and below a third
+    // cell-wise error within 1.5x of its global one and below a third
     // of the canonical cell-wise error.
     const test::GridProblem p = test::hung_problem(2, Eigen::Vector3i(8, 32, 1), 1e4, 1e7,
                                                    layers_across_y, Eigen::Vector3d(1, 4, 1));
