@@ -224,9 +224,7 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
              {"A_nnz", symmetric_nonzeros(L.A)},
              {"A_density", density(L.A, symmetric_nonzeros(L.A))},
              {"B_nnz", symmetric_nonzeros(L.B)},
-             {"B_density", density(L.B, symmetric_nonzeros(L.B))},
-             {"Phi_bytes", storage_bytes(L.Phi)},
-             {"Psi_bytes", storage_bytes(L.Psi)}});
+             {"B_density", density(L.B, symmetric_nonzeros(L.B))}});
         double rings_sum = 0;
         int rings_count = 0, rings_max = 0;
         for (const int r : L.region_rings)
@@ -260,7 +258,12 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
                       {"level", q},
                       {"cells", std::vector<int>(h.fine_cells.data(), h.fine_cells.data() + h.dim)},
                       {"nodes", grid_nodes(h.fine_cells, h.dim)},
-                      {"A_nnz", h.A_fine.nonZeros()}};
+                      {"A_nnz", h.A_fine.nonZeros()},
+                      // The fine grid has no refinement and no wavelets.
+                      {"C_nnz", nullptr},
+                      {"C_density", nullptr},
+                      {"B_nnz", nullptr},
+                      {"B_density", nullptr}};
         entry.update(to_json(d.levels[static_cast<std::size_t>(k - 1)]));
         levels.push_back(entry);
         c.reconstructions.push_back({fmt::format("level_{}", k),

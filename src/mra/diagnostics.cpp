@@ -66,7 +66,7 @@ Spectrum level_spectrum(const SparseMatrix& M, bool lower, const char* name, Ind
                         LevelDiagnostics& L) {
     std::string reason;
     if (M.rows() > limit) {
-        reason = fmt::format("{}: {} rows > max_spectrum_dofs {}", name, M.rows(), limit);
+        reason = fmt::format("{}: {} rows > coarse.spectrum_max_dofs = {}", name, M.rows(), limit);
     } else {
         try {
             return extreme_eigenvalues(lower ? symmetric_from_lower(M) : M);

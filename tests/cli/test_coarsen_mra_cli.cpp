@@ -103,6 +103,12 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
                         number(levels[0], "error_over_g") / number(levels[0], "error_over_u"),
                         1e-9 * number(L, "error_over_g") / number(L, "error_over_u"));
         }
+        // One storage key per matrix; the fine grid has no C̃ and no B: null, not absent.
+        EXPECT_FALSE(L.contains("Phi_bytes"));
+        if (i + 1 == levels.size()) {
+            for (const char* key : {"C_nnz", "C_density", "B_nnz", "B_density"})
+                EXPECT_TRUE(L.contains(key) && L[key].is_null()) << key;
+        }
         ASSERT_EQ(L["probes"].size(), 2u);
         EXPECT_EQ(L["probes"][0]["u"].size(), 2u);
         const std::string vtu = dir + "/out/" + L["vtu"].get<std::string>();
@@ -150,7 +156,7 @@ TEST(CliCoarsenMra, PerLevelSummaryFilesAndPlots) {
             EXPECT_TRUE(L["sparsity_B"].is_null());
             EXPECT_TRUE(L["spectrum_skipped"].get<bool>());
             EXPECT_THAT(L["spectrum_note"].get<std::string>(),
-                        HasSubstr("A: 544 rows > max_spectrum_dofs 400"));
+                        HasSubstr("A: 544 rows > coarse.spectrum_max_dofs = 400"));
             for (std::size_t p = 0; p < 2; ++p)
                 for (std::size_t d = 0; d < 2; ++d)
                     EXPECT_NEAR(L["probes"][p]["u"][d].get<double>(),
