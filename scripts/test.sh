@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite: set up, build, run every test (Release), then a fast subset under
 # AddressSanitizer + UndefinedBehaviorSanitizer. With COARSEGRAIN_FUZZ_SECONDS=N it also fuzzes
-# the mesh readers for N seconds (scripts/fuzz.sh; a third, clang, build).
+# the mesh readers and the scene loader for N seconds each (scripts/fuzz.sh; a third, clang,
+# build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -20,7 +21,7 @@ ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build/asan --output-on-failure -j "$jobs" -E 'Slow'
 
 if [ -n "${COARSEGRAIN_FUZZ_SECONDS:-}" ]; then
-  echo "== fuzzing the mesh readers for ${COARSEGRAIN_FUZZ_SECONDS} s" >&2
+  echo "== fuzzing the mesh readers and the scene loader, ${COARSEGRAIN_FUZZ_SECONDS} s each" >&2
   scripts/fuzz.sh "$COARSEGRAIN_FUZZ_SECONDS"
 fi
 echo "all tests passed" >&2
