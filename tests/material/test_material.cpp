@@ -95,7 +95,13 @@ TEST(Anisotropic, ValidationMessagesNameTheValue) {
     expect_error([&] { material::anisotropic(2, C, 1); }, "C(0,1) = 0.5 and C(1,0) = 0");
     Matrix D = Matrix::Identity(3, 3);
     D(2, 2) = -3;  // symmetric, indefinite
-    expect_error([&] { material::anisotropic(2, D, 1); }, "smallest -3 must be > 0");
+    expect_error([&] { material::anisotropic(2, D, 1); }, "eigenvalues are -3, 1, 1 (ratio -3)");
+    // Positive but 13 decades apart: the criterion is relative, and the message says so.
+    Matrix F = Matrix::Identity(3, 3);
+    F(0, 0) = 1e-13;
+    expect_error([&] { material::anisotropic(2, F, 1); },
+                 "smallest / largest eigenvalue > 1e-12, but its eigenvalues are 1e-13, 1, 1 "
+                 "(ratio 1e-13)");
     expect_error([&] { material::anisotropic(3, D, 1); }, "must be 6x6 (Mandel), got 3x3");
     expect_error([&] { material::anisotropic(2, Matrix::Identity(3, 3), -1); },
                  "density = -1 must be > 0");
