@@ -121,6 +121,7 @@ int main(int argc, char** argv) {
     cg::set_progress_enabled(!quiet);
     if (threads > 0) omp_set_num_threads(threads);
 
+    int failed = 0;  // methods of a comparison that could not run
     try {
         const auto start = std::chrono::steady_clock::now();
         if (*solve) {
@@ -132,13 +133,15 @@ int main(int argc, char** argv) {
             const cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
             const double read =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            cg::app::run_coarsen(sc, selected_methods(sc, method), coarsen_out, "coarsen", read);
+            failed = cg::app::run_coarsen(sc, selected_methods(sc, method), coarsen_out, "coarsen",
+                                          read);
         } else if (*demo) {
             const cg::scene::Scene sc =
                 cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
             const double read =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            cg::app::run_coarsen(sc, cg::coarsen::configured_methods(sc), demo_out, "demo", read);
+            failed = cg::app::run_coarsen(sc, cg::coarsen::configured_methods(sc), demo_out, "demo",
+                                          read);
         }
     } catch (const cg::Error& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
@@ -148,6 +151,11 @@ int main(int argc, char** argv) {
         return kExitError;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: internal: %s\n", e.what());
+        return kExitError;
+    }
+    if (failed > 0) {
+        std::fprintf(stderr, "error: %d method%s failed (see the table and summary.json)\n",
+                     failed, failed == 1 ? "" : "s");
         return kExitError;
     }
     return 0;

@@ -70,7 +70,8 @@ void write_report_data(const scene::Scene& sc, const FineRun& f,
     }
     nlohmann::json methods = nlohmann::json::array();
     for (const MethodResult& r : results)
-        methods.push_back({{"method", r.method},
+        if (r.failure.empty())
+            methods.push_back({{"method", r.method},
                            {"dofs", r.dofs},
                            {"build_seconds", r.build_seconds},
                            {"solve_seconds", r.factorize_and_solve},
@@ -99,11 +100,14 @@ std::string table_markdown(const FineRun& f, const std::vector<MethodResult>& re
     t += fmt::format("| fine | {} | | {:.3f} | 1 | 0 | 0 | 0 | 1 |\n", f.model.mesh.num_dofs(),
                      f.factorize_and_solve());
     for (const MethodResult& r : results)
-        t += fmt::format(
-            "| {} | {} | {:.2f} | {:.4f} | {:.0f}x | {:.3f} | {:.3f} | {:.3f} | {:.3f} |\n",
-            r.method, r.dofs, r.build_seconds, r.factorize_and_solve, r.speedup,
-            r.errors.energy_rel, r.errors.l2_rel, r.errors.max_displacement_rel,
-            r.errors.compliance_ratio);
+        t += r.failure.empty()
+                 ? fmt::format(
+                       "| {} | {} | {:.2f} | {:.4f} | {:.0f}x | {:.3f} | {:.3f} | {:.3f} | "
+                       "{:.3f} |\n",
+                       r.method, r.dofs, r.build_seconds, r.factorize_and_solve, r.speedup,
+                       r.errors.energy_rel, r.errors.l2_rel, r.errors.max_displacement_rel,
+                       r.errors.compliance_ratio)
+                 : fmt::format("| {} | failed: {} | | | | | | | |\n", r.method, r.failure);
     return t;
 }
 
@@ -156,7 +160,8 @@ std::string report_markdown(const scene::Scene& sc, const std::string& command, 
                   "Left: energy and l2 errors (log scale). Right: speedup of the coarse solve "
                   "over the fine solve.");
     bool mra = false;
-    for (const MethodResult& r : results) mra = mra || r.summary["coarse"].contains("levels");
+    for (const MethodResult& r : results)
+        mra = mra || (r.failure.empty() && r.summary["coarse"].contains("levels"));
     if (mra)
         md += picture(made, "mra_levels.png", "Material-adapted hierarchy: error per level",
                       "||u^k - u||_A / ||g||_2 of the single-level solve on every level k "
@@ -168,10 +173,11 @@ std::string report_markdown(const scene::Scene& sc, const std::string& command, 
         "- `solution_fine.vtu`: the fine solution (open in ParaView, Warp By Vector with "
         "`displacement`).\n";
     for (const MethodResult& r : results)
-        md += fmt::format(
-            "- `{}/`: `summary.json`, `solution_coarse.vtu` (its solution on the "
-            "fine mesh, with `error`) and the method's own files.\n",
-            r.method);
+        if (r.failure.empty())
+            md += fmt::format(
+                "- `{}/`: `summary.json`, `solution_coarse.vtu` (its solution on the "
+                "fine mesh, with `error`) and the method's own files.\n",
+                r.method);
     md += "\nThe scene, every key and each method's options: docs/guide.md.\n";
     return md;
 }
@@ -206,9 +212,13 @@ void print_comparison_table(const scene::Scene& sc, const std::string& command, 
     std::printf("  %-18s %9d %9s %9.4f %9s %8s %8s %8s %8s\n", "fine", f.model.mesh.num_dofs(), "-",
                 f.factorize_and_solve(), "1", "0", "0", "0", "1");
     for (const MethodResult& r : results)
-        std::printf("  %-18s %9d %9.3f %9.4f %8.0fx %8.4f %8.4f %8.4f %8.4f\n", r.method.c_str(),
-                    r.dofs, r.build_seconds, r.factorize_and_solve, r.speedup, r.errors.energy_rel,
-                    r.errors.l2_rel, r.errors.max_displacement_rel, r.errors.compliance_ratio);
+        if (r.failure.empty())
+            std::printf("  %-18s %9d %9.3f %9.4f %8.0fx %8.4f %8.4f %8.4f %8.4f\n",
+                        r.method.c_str(), r.dofs, r.build_seconds, r.factorize_and_solve, r.speedup,
+                        r.errors.energy_rel, r.errors.l2_rel, r.errors.max_displacement_rel,
+                        r.errors.compliance_ratio);
+        else
+            std::printf("  %-18s failed: %s\n", r.method.c_str(), r.failure.c_str());
     std::printf(
         "  (errors against the fine solution: energy and l2 relative, max|u| relative "
         "error of the largest displacement, compliance ratio f.u_c / f.u)\n");

@@ -24,6 +24,9 @@ struct FineRun {
 /// One method's run against the fine run.
 struct MethodResult {
     std::string method;
+    /// Why the method could not run (its error message); empty if it ran. A failed method has
+    /// no figures, only this.
+    std::string failure;
     Index dofs = 0;                  ///< coarse DOFs
     double build_seconds = 0;        ///< sum of the build phases
     double factorize_and_solve = 0;  ///< coarse factorization + solve, seconds
@@ -33,7 +36,8 @@ struct MethodResult {
     nlohmann::json summary;  ///< the method's summary.json
 };
 
-/// Writes the comparison's report into `dir` (method i's files are in dir/<method i>/):
+/// Writes the comparison's report into `dir` (method i's files are in dir/<method i>/; failed
+/// methods appear in the table with their reason and nowhere else):
 /// - report_data.json: the pictures' input (every method's row and its displacement on the
 ///   fine mesh's surface: boundary facets in 3D, all elements in 2D);
 /// - deformed.png (the deformed fine surface of the fine solution beside each method's, one

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "coarsegrain/coarsen/runtime.hpp"
+#include "coarsegrain/common/error.hpp"
 #include "coarsegrain/io/file_util.hpp"
 #include "output.hpp"
 #include "plots.hpp"
@@ -203,21 +204,42 @@ void run_one(const scene::Scene& sc, const std::string& method, const fs::path& 
         dir.c_str(), peak_rss_mb());
 }
 
-void run_comparison(const scene::Scene& sc, const std::vector<std::string>& methods,
-                    const fs::path& dir, const std::string& command, double read_seconds) {
+// One method of a comparison: its result, or its failure (the reason, and no folder) if it
+// cannot run on this scene or fails while it builds or solves.
+MethodResult try_method(const scene::Scene& sc, FineRun& f, const std::string& method,
+                        const fs::path& dir) {
+    const fs::path sub = dir / method;
+    try {
+        io::ensure_writable_dir(sub.string());
+        return run_method(sc, f, method, sub, "../solution_fine.vtu", false);
+    } catch (const Error& e) {
+        std::error_code ec;
+        fs::remove_all(sub, ec);
+        std::fprintf(stderr, "coarsegrain: method %s failed: %s\n", method.c_str(), e.what());
+        MethodResult r;
+        r.method = method;
+        r.failure = e.what();
+        return r;
+    }
+}
+
+int run_comparison(const scene::Scene& sc, const std::vector<std::string>& methods,
+                   const fs::path& dir, const std::string& command, double read_seconds) {
     FineRun f = solve_fine(sc, read_seconds);
     std::vector<MethodResult> results;
-    for (const std::string& method : methods) {
-        const fs::path sub = dir / method;
-        io::ensure_writable_dir(sub.string());
-        results.push_back(run_method(sc, f, method, sub, "../solution_fine.vtu", false));
-    }
+    for (const std::string& method : methods) results.push_back(try_method(sc, f, method, dir));
     write_fine(f, dir);
     const nlohmann::json plots = write_report(sc, command, f, results, dir);
     nlohmann::json fine_json = fine_sizes(f.model);
     fine_json["timings"] = timings_json(f.timings);
     nlohmann::json rows = nlohmann::json::array();
-    for (const MethodResult& r : results)
+    int failed = 0;
+    for (const MethodResult& r : results) {
+        if (!r.failure.empty()) {
+            rows.push_back({{"method", r.method}, {"error", r.failure}});
+            ++failed;
+            continue;
+        }
         rows.push_back(
             {{"method", r.method},
              {"folder", r.method},
@@ -228,6 +250,7 @@ void run_comparison(const scene::Scene& sc, const std::vector<std::string>& meth
              {"errors", errors_json(r.errors)},
              {"speedup", {{"factorize_and_solve", r.speedup}}},
              {"max_displacement", r.summary["max_displacement"]}});
+    }
     write_summary(dir.string(), {
                                     {"command", command},
                                     {"scene", sc.source},
@@ -240,6 +263,7 @@ void run_comparison(const scene::Scene& sc, const std::vector<std::string>& meth
                                     {"strain_energy", f.solution.strain_energy},
                                     {"compliance", f.model.f.dot(f.solution.u)},
                                     {"methods", rows},
+                                    {"failed_methods", failed},
                                     {"report", "report.md"},
                                     {"plots", plots},
                                     {"peak_memory_mb", peak_rss_mb()},
@@ -249,18 +273,34 @@ void run_comparison(const scene::Scene& sc, const std::vector<std::string>& meth
         "  wrote %s/report.md, summary.json, solution_fine.vtu and a folder per method "
         "(peak memory %.0f MB)\n",
         dir.c_str(), peak_rss_mb());
+    return failed;
 }
 
 }  // namespace
 
-void run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
-                 const std::string& out_dir, const std::string& command, double read_seconds) {
-    for (const std::string& method : methods) coarsen::validate_method(sc, method);
-    io::ensure_writable_dir(out_dir);
-    if (methods.size() == 1)
+int run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
+                const std::string& out_dir, const std::string& command, double read_seconds) {
+    if (methods.size() == 1) {
+        coarsen::validate_method(sc, methods.front());
+        io::ensure_writable_dir(out_dir);
         run_one(sc, methods.front(), out_dir, read_seconds);
-    else
-        run_comparison(sc, methods, out_dir, command, read_seconds);
+        return 0;
+    }
+    // Several methods: those that cannot run on this scene are reported in the comparison;
+    // if none can, nothing is worth solving.
+    std::vector<std::string> runnable;
+    std::string first_error;
+    for (const std::string& method : methods) {
+        try {
+            coarsen::validate_method(sc, method);
+            runnable.push_back(method);
+        } catch (const Error& e) {
+            if (first_error.empty()) first_error = e.what();
+        }
+    }
+    CG_VERIFY(!runnable.empty(), "no method can run on this scene: {}", first_error);
+    io::ensure_writable_dir(out_dir);
+    return run_comparison(sc, methods, out_dir, command, read_seconds);
 }
 
 }  // namespace coarsegrain::app

@@ -142,6 +142,46 @@ TEST(CliCoarsen, AllMethodsCompareInOneRun) {
     EXPECT_THAT(report, HasSubstr("deformed.png was not made"));
 }
 
+// A method that cannot run does not stop the others: with an anisotropic fine material the
+// naive average (isotropic parameters only) fails, the others run, and the exit code says so.
+TEST(CliCoarsen, AllRunsEveryMethodThatCanRun) {
+    const std::string dir = temp_dir("cli_coarsen_all_partial");
+    json j = coarse_scene();
+    j["coarse"].erase("levels");
+    j["materials"]["2"] = {{"C_voigt",
+                            {{12, 4, 4, 0, 0, 0},
+                             {4, 20, 4, 0, 0, 0},
+                             {4, 4, 12, 0, 0, 0},
+                             {0, 0, 0, 4, 0, 0},
+                             {0, 0, 0, 0, 4, 0},
+                             {0, 0, 0, 0, 0, 4}}},
+                           {"density", 2}};
+    std::string output;
+    const int code = run("COARSEGRAIN_PYTHON=false " + kCli + " --quiet coarsen " +
+                             write_scene(dir, j) + " --method all --out " + dir + "/out",
+                         &output);
+    EXPECT_EQ(code, 1) << output;
+    EXPECT_THAT(output, HasSubstr("method naive failed"));
+    EXPECT_THAT(output, HasSubstr("error: 1 method failed"));
+    const json s = read_json(dir + "/out/summary.json");
+    EXPECT_EQ(s["failed_methods"], 1);
+    ASSERT_EQ(s["methods"].size(), 4u);
+    for (const json& m : s["methods"]) {
+        const std::string method = m["method"];
+        if (method == "naive") {
+            EXPECT_THAT(m["error"].get<std::string>(), HasSubstr("isotropic"));
+            EXPECT_FALSE(m.contains("errors"));
+            EXPECT_FALSE(fs::exists(dir + "/out/naive"));
+        } else {
+            EXPECT_TRUE(std::isfinite(m["errors"]["l2_rel"].get<double>())) << method;
+            EXPECT_TRUE(fs::exists(dir + "/out/" + method + "/summary.json")) << method;
+        }
+    }
+    std::ifstream in(dir + "/out/report.md");
+    const std::string report((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_THAT(report, HasSubstr("| naive | failed: "));
+}
+
 TEST(CliCoarsen, MethodListErrors) {
     const std::string dir = temp_dir("cli_coarsen_method_list");
     const std::string scene = write_scene(dir, coarse_scene());
