@@ -1,5 +1,6 @@
 #pragma once
 /// @file Global operators assembled in parallel (OpenMP) straight into compressed storage.
+#include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 
@@ -22,9 +23,12 @@ enum class MassType { Lumped, Consistent };
 /// with two materials (262,144 elements, 823,875 DOFs, 64.7M stored entries): 0.40 s on the
 /// grid (0.65 s on 1 core), mostly writing the entries; 0.80 s for the same mesh distorted;
 /// 0.53 s for 1.57M distorted tets.
-/// @throws Error if the materials do not match the mesh, or an element is inverted/degenerate
-///         (the message names the element)
-SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats);
+/// `formulation` chooses the element (element_stiffness); Formulation::Incompatible needs a
+/// Quad4 / Hex8 mesh.
+/// @throws Error if the materials do not match the mesh, an element is inverted/degenerate
+///         (the message names the element), or the formulation does not apply to the mesh
+SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
+                              Formulation formulation = Formulation::Standard);
 
 /// Global mass matrix (num_dofs square): consistent, M = sum_e ∫ rho N_a N_b times the dim x dim
 /// identity per node pair (stored entries only on the diagonal of each block), or lumped, the
