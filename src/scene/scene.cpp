@@ -6,6 +6,7 @@
 
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/loads.hpp"
+#include "coarsegrain/fem/locking.hpp"
 #include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/io/material_fields.hpp"
 #include "coarsegrain/io/mesh_io.hpp"
@@ -213,7 +214,7 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     const JsonReader root(j, "", s.source);
     root.require_object();
     root.allow_only({"description", "dimension", "mesh", "materials", "material_field", "plane",
-                     "dirichlet", "loads", "probes", "solver", "coarse"});
+                     "dirichlet", "loads", "probes", "fem", "solver", "coarse"});
     std::optional<int> dimension;
     if (auto d = root.find("dimension")) {
         dimension = d->integer();
@@ -265,6 +266,23 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     }
     if (auto p = root.find("probes"))
         for (std::size_t i = 0; i < p->array_size(); ++i) s.probes.push_back(p->at(i).vector(dim));
+    if (auto f = root.find("fem")) {
+        f->allow_only({"formulation"});
+        if (auto v = f->find("formulation")) {
+            try {
+                s.formulation = fem::parse_formulation(v->string());
+            } catch (const InvalidScene&) {
+                throw;
+            } catch (const Error& e) {
+                v->fail("{}", e.what());
+            }
+            v->fail_unless(fem::formulation_applies(s.formulation, s.mesh.type),
+                           "\"{}\" does not apply to {} elements; expected \"standard\" (any "
+                           "element) or \"incompatible\" (hex and quad elements only)",
+                           fem::formulation_name(s.formulation),
+                           mesh::element_name(s.mesh.type));
+        }
+    }
     if (auto sv = root.find("solver")) {
         sv->allow_only({"backend", "tolerance"});
         if (auto b = sv->find("backend")) {
@@ -319,7 +337,8 @@ FineModel build_fine_model(const Scene& scene, Timings* timings) {
                          scene.source, c.key);
             m.bc.fix_nodes(nodes, c.value);
         }
-        m.K = fem::stiffness_matrix(m.mesh, m.materials);
+        m.K = fem::stiffness_matrix(m.mesh, m.materials, scene.formulation);
+        m.warnings = fem::locking_warnings(m.mesh, m.materials, scene.formulation);
         m.f = Vector::Zero(m.mesh.num_dofs());
         if (scene.gravity.squaredNorm() > 0)
             m.f += fem::gravity_load(m.mesh, m.materials, scene.gravity);

@@ -13,6 +13,7 @@
 
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
+#include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
@@ -42,6 +43,8 @@ struct Scene {
     Eigen::VectorXd gravity;  ///< size dim (zero if absent)
     std::vector<BoxCondition> traction;
     std::vector<Eigen::VectorXd> probes;
+    /// "fem": {"formulation": ..}: the fine element (default standard; incompatible: hex/quad).
+    fem::Formulation formulation = fem::Formulation::Standard;
     solve::SolverOptions solver;
     /// The "coarse" block as given (its keys checked against kCoarseKeys); each coarsening
     /// method reads and validates its own options from it.
@@ -75,6 +78,9 @@ struct FineModel {
     SparseMatrix K;  ///< num_dofs square stiffness (no conditions applied)
     Vector f;        ///< num_dofs load: gravity + traction
     fem::Dirichlet bc;
+    /// One line per problem worth a user's attention (fem::locking_warnings), for stderr and
+    /// summary.json's "warnings".
+    std::vector<std::string> warnings;
 };
 
 /// Assembles the fine model. Phases "assemble" (stiffness, loads) are added to `timings`.
