@@ -396,7 +396,8 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
 }
 
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine) {
-    const Options options = parse_options(scene.coarse, scene.source);
+    Options options = parse_options(scene.coarse, scene.source);
+    options.formulation = scene.formulation;  // that of fine.K
     const CompareOptions compare = parse_compare_options(scene.coarse, scene.source);
     for (std::size_t k = 0; k < fine.bc.dofs.size(); ++k)
         CG_VERIFY_AS(InvalidScene, fine.bc.values[static_cast<Index>(k)] == 0.0,

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 
 namespace coarsegrain::mra {
@@ -112,6 +113,10 @@ struct Options {
     /// more entries than all C̃^k together (128x128 quads, 3 levels: 12 GB), and basis() and
     /// reconstruct() give Φ^k and Φ^{k,T} u^k on demand from the C̃^k.
     bool store_bases = false;
+    /// The fine element (the scene's "fem" block), for the element matrices the construction
+    /// computes itself: the cell-localized solves' A_T and the coarsest cells' own hierarchies.
+    /// It must be that of the fine K given to build_hierarchy.
+    fem::Formulation formulation = fem::Formulation::Standard;
 };
 
 /// Options of compare_levels, read from the scene's "coarse" block (parse_compare_options).
