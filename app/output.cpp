@@ -2,6 +2,7 @@
 
 #include <sys/resource.h>
 
+#include <cstdio>
 #include <filesystem>
 
 #include "coarsegrain/fem/stress.hpp"
@@ -40,6 +41,10 @@ io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u) {
     fields.add_cell("strain", fem::mandel_to_physical(stress.strain));
     fields.add_cell_scalar("von_mises", stress.von_mises);
     return fields;
+}
+
+void print_warnings(const std::vector<std::string>& warnings) {
+    for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 }
 
 nlohmann::json fine_sizes(const scene::FineModel& model) {

@@ -28,6 +28,9 @@ io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u);
 /// The fine static problem's sizes for summary.json "fine".
 nlohmann::json fine_sizes(const scene::FineModel& model);
 
+/// One "warning: ..." line on stderr per warning (also under --quiet: they are not progress).
+void print_warnings(const std::vector<std::string>& warnings);
+
 /// [{"point": [...], "u": [...]}, ...]; with `fine` given, also "u_fine" beside each "u".
 nlohmann::json probes_json(const scene::Scene& scene, const std::vector<Eigen::VectorXd>& u,
                            const std::vector<Eigen::VectorXd>* fine = nullptr);

@@ -38,6 +38,7 @@ FineRun solve_fine(const scene::Scene& sc, double read_seconds) {
     FineRun f;
     f.timings.add("read", read_seconds);
     f.model = scene::build_fine_model(sc, &f.timings);
+    print_warnings(f.model.warnings);
     f.solution = scene::solve_static(f.model, sc.solver, &f.timings);
     f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
     return f;
@@ -158,6 +159,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         {"probes",
          probes_json(sc, scene::probe_displacements(sc, fine.mesh, uc.u_fine), &f.probes)},
         {"errors", errors_json(r.errors)},
+        {"warnings", fine.warnings},
         {"speedup",
          {{"solve", f.timings["solve"] / tc["solve"]}, {"factorize_and_solve", r.speedup}}},
         {"max_displacement", nodal_magnitude(uc.u_fine, dim).maxCoeff()},
@@ -258,6 +260,7 @@ int run_comparison(const scene::Scene& sc, const std::vector<std::string>& metho
                                     {"solver", solve::backend_name(sc.solver.backend)},
                                     {"threads", omp_get_max_threads()},
                                     {"probes", probes_json(sc, f.probes)},
+                                    {"warnings", f.model.warnings},
                                     {"max_displacement",
                                      nodal_magnitude(f.solution.u, f.model.mesh.dim()).maxCoeff()},
                                     {"strain_energy", f.solution.strain_energy},

@@ -16,6 +16,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
     Timings t;
     t.add("read", read_seconds);
     const scene::FineModel model = scene::build_fine_model(sc, &t);
+    print_warnings(model.warnings);
     const scene::StaticSolution sol = scene::solve_static(model, sc.solver, &t);
     const int dim = model.mesh.dim();
     const std::vector<Eigen::VectorXd> probes = scene::probe_displacements(sc, model.mesh, sol.u);
@@ -34,6 +35,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
                                {"solver", solve::backend_name(sc.solver.backend)},
                                {"threads", omp_get_max_threads()},
                                {"probes", probes_json(sc, probes)},
+                               {"warnings", model.warnings},
                                {"max_displacement", max_u},
                                {"strain_energy", sol.strain_energy},
                                {"compliance", model.f.dot(sol.u)},

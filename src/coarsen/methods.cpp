@@ -17,6 +17,7 @@ bool is_hierarchy(const std::string& method) { return method.starts_with("mra");
 /// Dirichlet treatment.
 mra::Options hierarchy_options(const scene::Scene& scene, const std::string& method) {
     mra::Options o = scene.coarse.mra;
+    o.formulation = scene.formulation;  // that of the fine K
     if (method.starts_with("mra-linear")) o.refinement = mra::Refinement::Linear;
     if (method.starts_with("mra-dirac")) o.refinement = mra::Refinement::Dirac;
     if (method.ends_with("-blind")) o.dirichlet = mra::DirichletTreatment::Ignore;

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/fem/element.hpp"
 #include "element_kernels.hpp"
 #include "mesh_graph.hpp"
 
@@ -203,11 +204,20 @@ void scatter(const mesh::Mesh& mesh, Skeleton& s, ComputeElementMatrix&& compute
 
 }  // namespace
 
-SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats) {
+SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
+                              Formulation formulation) {
     detail::verify_materials(mesh, mats, "stiffness_matrix");
+    verify_formulation(formulation, mesh.type);
     return kernels::dispatch(mesh.type, [&](auto shape) {
         using S = decltype(shape);
         constexpr int n = mandel_size(S::dim);
+        const auto element_matrix = [formulation](const kernels::Coords<S>& X,
+                                                  const kernels::Tensor<S>& C) {
+            if constexpr (!S::simplex)
+                if (formulation == Formulation::Incompatible)
+                    return kernels::incompatible_stiffness<S>(X, C);
+            return kernels::stiffness<S>(X, C);
+        };
         SparseMatrix K;
         const bool cached = congruent_grid(mesh);
         Skeleton s = skeleton(mesh, true, !cached, K);
@@ -216,7 +226,7 @@ SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMat
                 const kernels::Coords<S> X = grid_cell<S>(*mesh.grid);
                 std::vector<kernels::ElementMatrix<S>> cache;
                 for (const material::Material& m : mats.table)
-                    cache.push_back(kernels::stiffness<S>(X, m.C.topLeftCorner<n, n>()));
+                    cache.push_back(element_matrix(X, m.C.topLeftCorner<n, n>()));
                 gather<S, true>(mesh, s, [&](Index e) -> const kernels::ElementMatrix<S>& {
                     return cache[static_cast<std::size_t>(mats.index[e])];
                 });
@@ -224,8 +234,8 @@ SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMat
             }
         }
         scatter<S, true>(mesh, s, [&](Index e) {
-            return kernels::stiffness<S>(kernels::element_coords<S>(mesh, e),
-                                         mats.of(e).C.template topLeftCorner<n, n>());
+            return element_matrix(kernels::element_coords<S>(mesh, e),
+                                  mats.of(e).C.template topLeftCorner<n, n>());
         });
         return K;
     });

@@ -32,15 +32,42 @@ Matrix strain_displacement(mesh::ElementType type, const Matrix& X, const Eigen:
     });
 }
 
-Matrix element_stiffness(mesh::ElementType type, const Matrix& X, const Matrix& C) {
+std::string formulation_name(Formulation f) {
+    return f == Formulation::Incompatible ? "incompatible" : "standard";
+}
+
+Formulation parse_formulation(const std::string& name) {
+    if (name == "standard") return Formulation::Standard;
+    if (name == "incompatible") return Formulation::Incompatible;
+    throw Error(fmt::format(
+        "unknown formulation \"{}\"; expected \"standard\" or \"incompatible\"", name));
+}
+
+bool formulation_applies(Formulation f, mesh::ElementType type) {
+    return f == Formulation::Standard || !mesh::is_simplex(type);
+}
+
+void verify_formulation(Formulation f, mesh::ElementType type) {
+    CG_VERIFY(formulation_applies(f, type),
+              "fem.formulation \"{}\" does not apply to {} elements: it needs hex or quad "
+              "elements; use \"standard\" for tets and triangles",
+              formulation_name(f), mesh::element_name(type));
+}
+
+Matrix element_stiffness(mesh::ElementType type, const Matrix& X, const Matrix& C,
+                         Formulation formulation) {
+    verify_formulation(formulation, type);
     return kernels::dispatch(type, [&](auto shape) -> Matrix {
         using S = decltype(shape);
         constexpr int n = mandel_size(S::dim);
         CG_VERIFY(C.rows() == n && C.cols() == n,
                   "element_stiffness: a {}D tensor must be {}x{}, got {}x{}", S::dim, n, n,
                   C.rows(), C.cols());
-        return kernels::stiffness<S>(fixed_coords<S>(X, "element_stiffness"),
-                                     kernels::Tensor<S>(C));
+        const kernels::Coords<S> Xe = fixed_coords<S>(X, "element_stiffness");
+        if constexpr (!S::simplex)
+            if (formulation == Formulation::Incompatible)
+                return kernels::incompatible_stiffness<S>(Xe, kernels::Tensor<S>(C));
+        return kernels::stiffness<S>(Xe, kernels::Tensor<S>(C));
     });
 }
 

@@ -270,6 +270,77 @@ ElementMatrix<S> stiffness(const Coords<S>& X, const Tensor<S>& C) {
     return K;  // exactly symmetric
 }
 
+/// Mandel strain-displacement matrix of Rows "nodes" from their physical gradients G (Rows by
+/// dim): the columns of node a are dim*a .. dim*a + dim - 1 (strain_displacement for any count).
+template <int Dim, int Rows>
+Eigen::Matrix<double, mandel_size(Dim), Rows * Dim> strain_displacement_of(
+    const Eigen::Matrix<double, Rows, Dim>& G) {
+    Eigen::Matrix<double, mandel_size(Dim), Rows * Dim> B;
+    B.setZero();
+    for (int a = 0; a < Rows; ++a) {
+        for (int d = 0; d < Dim; ++d) B(d, Dim * a + d) = G(a, d);
+        for (const auto& [row, i, j] : ShearPairs<Dim>::value) {
+            B(row, Dim * a + i) = kInvSqrt2 * G(a, j);
+            B(row, Dim * a + j) = kInvSqrt2 * G(a, i);
+        }
+    }
+    return B;
+}
+
+/// How the gradients of the incompatible modes are mapped to physical space.
+enum class ModeMapping {
+    /// Taylor, Beresford and Wilson (1976): the centre Jacobian J0 and the factor j0 / j(xi)
+    /// (j = det J), so that the modes' strain integrates to zero over any element and the element
+    /// passes the patch test on distorted meshes. The element of Formulation::Incompatible.
+    Taylor,
+    /// CalculiX's C3D8I (shape8hu.f): the centre Jacobian J0 without the factor j0 / j, i.e.
+    /// Wilson's modes with Taylor's J0. Identical to Taylor on parallelograms / parallelepipeds
+    /// (j constant); on other elements the modes' strain has a nonzero mean and the element fails
+    /// the patch test. Kept to show exactly what CalculiX computes (tests/fem/test_calculix.cpp).
+    CalculiX,
+};
+
+/// Q1 stiffness with incompatible modes (Wilson, Taylor et al.): the displacement is enriched
+/// inside each element by the dim bubbles P_k = 4 xi_k (1 - xi_k) per component (the 1 - r_k^2
+/// of the [-1,1] element), dim * dim internal amplitudes that are condensed out statically:
+/// K = K_uu - K_ua K_aa^-1 K_au, all blocks ∫ B^T C B with 2^dim Gauss points. The modes'
+/// gradients dP_k/dxi_k (row k of J0^-1), scaled per ModeMapping, vanish at the element centre,
+/// so the centre strain is that of the nodal (Q1) field alone. The modes add the quadratic
+/// displacements a Q1 element lacks: bending without shear locking and, on regular meshes,
+/// volumetric strain free enough not to lock near incompressibility (docs/guide.md).
+template <class S, ModeMapping Mapping = ModeMapping::Taylor>
+ElementMatrix<S> incompatible_stiffness(const Coords<S>& X, const Tensor<S>& C) {
+    static_assert(!S::simplex, "incompatible modes are defined for Q1 elements only");
+    constexpr int D = S::dim, npe = S::npe, rows = npe + D, nu = D * npe, na = D * D;
+    using Full = Eigen::Matrix<double, D * rows, D * rows>;
+    double j0 = 0;
+    physical_gradients<S>(X, S::centre(), j0);  // throws if the element is degenerate
+    const Eigen::Matrix<double, D, D> J0inv =
+        (X.transpose() * S::dN(S::centre())).inverse();  // J_ik = dx_i / dxi_k at the centre
+    Full K = Full::Zero();
+    const auto rule = S::stiffness_rule();
+    for (std::size_t q = 0; q < rule.points.size(); ++q) {
+        const typename S::Point& xi = rule.points[q];
+        double j = 0;
+        Eigen::Matrix<double, rows, D> G;
+        G.template topRows<npe>() = physical_gradients<S>(X, xi, j);
+        const double scale = Mapping == ModeMapping::Taylor ? j0 / j : 1.0;
+        for (int k = 0; k < D; ++k)
+            G.row(npe + k) = (scale * 4.0 * (1.0 - 2.0 * xi[k])) * J0inv.row(k);
+        const Eigen::Matrix<double, mandel_size(D), D * rows> B =
+            strain_displacement_of<D, rows>(G);
+        K.noalias() += (rule.weights[q] * j) * (B.transpose() * C * B);
+    }
+    const Eigen::LLT<Eigen::Matrix<double, na, na>> Kaa(K.template bottomRightCorner<na, na>());
+    CG_VERIFY(Kaa.info() == Eigen::Success,
+              "incompatible modes: the modes' stiffness is not positive definite (degenerate "
+              "element or elasticity tensor)");
+    const Eigen::Matrix<double, nu, na> Kua = K.template topRightCorner<nu, na>();
+    const ElementMatrix<S> Kc =
+        K.template topLeftCorner<nu, nu>() - Kua * Kaa.solve(Kua.transpose());
+    return 0.5 * (Kc + Kc.transpose());  // exactly symmetric despite round-off
+}
+
 /// Scalar consistent mass ∫ rho N_a N_b (npe square); exact for every element of its type.
 template <class S>
 Eigen::Matrix<double, S::npe, S::npe> scalar_mass(const Coords<S>& X, double density) {

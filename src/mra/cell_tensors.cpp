@@ -99,7 +99,8 @@ CellTensor coarsest_cell_tensor(const mesh::Mesh& mesh, const material::ElementM
     options.levels = m + 1;
     options.invariance = true;
     const Hierarchy h =
-        build_hierarchy(mesh, fem::stiffness_matrix(mesh, mats), {}, options, &mats);
+        build_hierarchy(mesh, fem::stiffness_matrix(mesh, mats, options.formulation), {}, options,
+                        &mats);
     const Matrix F = uniform_stress_loads(mesh);
     Matrix G(h.level(1).A.rows(), F.cols());
     for (Index a = 0; a < F.cols(); ++a) G.col(a) = coarse_grain(h, F.col(a), 1);

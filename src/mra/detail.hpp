@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 
@@ -87,11 +88,12 @@ struct CellStiffness {
 /// A_T for every block T of patch^dim cells of a level with `cells` per axis (blocks without
 /// elements are left out); an element belongs to the cell containing its centroid. With the
 /// present fine DOFs `fine_dofs` (the fixed ones eliminated) sum_T A_T is the fine operator
-/// principal_submatrix(K, fine_dofs) when K is the stiffness of `materials`.
+/// principal_submatrix(K, fine_dofs) when K is the stiffness of `materials` and `formulation`.
 std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
                                           const material::ElementMaterials& materials,
                                           const IndexVector& fine_dofs,
-                                          const Eigen::Vector3i& cells, int patch);
+                                          const Eigen::Vector3i& cells, int patch,
+                                          fem::Formulation formulation);
 
 /// Z with cell-wise localized solves (Localization::Cell): for every cell T of level k (parts),
 /// R^T = (W Φ)[:, T] A_T (C^† Φ)[:, T]^T, Φ = Φ^{k+1} on the present fine DOFs (WPhi = W Φ,

@@ -370,7 +370,8 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                 const Phase phase(tag + "Z (cell-localized solves)", &h.timings);
                 Z = detail::cell_localized_z(
                     L.B, L.W, product(L.W, Phi_present), product(L.C_dagger, Phi_present),
-                    detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells, options.patch),
+                    detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells, options.patch,
+                                           options.formulation),
                     g, rings);
             }
             const Phase phase(tag + "C adapted", &h.timings);

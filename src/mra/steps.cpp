@@ -572,7 +572,8 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
 std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
                                           const material::ElementMaterials& materials,
                                           const IndexVector& fine_dofs,
-                                          const Eigen::Vector3i& cells, int patch) {
+                                          const Eigen::Vector3i& cells, int patch,
+                                          fem::Formulation formulation) {
     const int dim = mesh.dim();
     CG_VERIFY(materials.size() == mesh.num_elements(),
               "mra: cell localization got {} element materials for {} elements", materials.size(),
@@ -620,7 +621,8 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
         std::vector<Eigen::Triplet<double, Index>> entries;
         for (const Index e : elems) {
             const Matrix Ke = fem::element_stiffness(mesh.type, mesh.element_positions(e),
-                                                     material::tensor(materials.of(e), dim));
+                                                     material::tensor(materials.of(e), dim),
+                                                     formulation);
             std::vector<Index> pos(static_cast<std::size_t>(Ke.rows()), -1);
             for (Index a = 0; a < mesh.elements.cols(); ++a)
                 for (int d = 0; d < dim; ++d) {

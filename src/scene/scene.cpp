@@ -11,6 +11,7 @@
 
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/loads.hpp"
+#include "coarsegrain/fem/locking.hpp"
 #include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/io/material_fields.hpp"
 #include "coarsegrain/io/mesh_io.hpp"
@@ -279,7 +280,7 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     const JsonReader root(j, "", s.source);
     root.require_object();
     root.allow_only({"description", "dimension", "mesh", "materials", "material_field", "plane",
-                     "dirichlet", "loads", "probes", "solver", "coarse"});
+                     "dirichlet", "loads", "probes", "fem", "solver", "coarse"});
     // Everything that needs no mesh first, so that a bad option fails before a mesh is read.
     std::optional<int> dimension;
     if (auto d = root.find("dimension")) dimension = static_cast<int>(d->integer(2, 3));
@@ -299,6 +300,18 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
         }
         if (auto t = sv->find("tolerance")) s.solver.cg_tolerance = t->positive();
     }
+    if (auto f = root.find("fem")) {
+        f->allow_only({"formulation"});
+        if (auto v = f->find("formulation")) {
+            try {
+                s.formulation = fem::parse_formulation(v->string());
+            } catch (const InvalidScene&) {
+                throw;
+            } catch (const Error& e) {
+                v->fail("{}", e.what());
+            }
+        }
+    }
     if (auto c = root.find("coarse")) s.coarse = parse_coarse_options(c->json(), s.source);
 
     std::map<int, material::Material> carried;
@@ -307,6 +320,12 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     root.fail_unless(!dimension || *dimension == s.dimension, "dimension is {} but the mesh is {}D",
                      dimension.value_or(0), s.dimension);
     const int dim = s.dimension;
+    if (auto v = root.find("fem"); v && v->has("formulation"))
+        v->at("formulation")
+            .fail_unless(fem::formulation_applies(s.formulation, s.mesh.type),
+                         "\"{}\" does not apply to {} elements; expected \"standard\" (any "
+                         "element) or \"incompatible\" (hex and quad elements only)",
+                         fem::formulation_name(s.formulation), mesh::element_name(s.mesh.type));
 
     if (!carried.empty()) {
         root.fail_unless(!root.has("materials") && !root.has("material_field"),
@@ -453,7 +472,8 @@ FineModel build_fine_model(const Scene& scene, Timings* timings) {
         }
         m.boundary = mesh::boundary(m.mesh);
         m.bc = dirichlet_conditions(scene, m.mesh, "mesh");
-        m.K = fem::stiffness_matrix(m.mesh, m.materials);
+        m.K = fem::stiffness_matrix(m.mesh, m.materials, scene.formulation);
+        m.warnings = fem::locking_warnings(m.mesh, m.materials, scene.formulation);
         m.f = load_vector(scene, m.mesh, m.materials, m.boundary, "mesh");
     }
     return m;

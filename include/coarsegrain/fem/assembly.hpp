@@ -1,5 +1,6 @@
 #pragma once
 /// @file Global operators assembled in parallel (OpenMP) straight into compressed storage.
+#include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 
@@ -20,9 +21,12 @@ enum class MassType { Lumped, Consistent };
 ///   element colouring when the node numbering has no locality.
 /// 64^3 hexes (823,875 DOFs) assemble in 0.40 s on 2 cores, mostly writing the entries
 /// (bench/bench_assembly.cpp; docs/performance.md, "Assembly").
-/// @throws Error if the materials do not match the mesh, or an element is inverted/degenerate
-///         (the message names the element)
-SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats);
+/// `formulation` chooses the element (element_stiffness); Formulation::Incompatible needs a
+/// Quad4 / Hex8 mesh.
+/// @throws Error if the materials do not match the mesh, an element is inverted/degenerate
+///         (the message names the element), or the formulation does not apply to the mesh
+SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMaterials& mats,
+                              Formulation formulation = Formulation::Standard);
 
 /// Global mass matrix (num_dofs square): consistent, M = sum_e ∫ rho N_a N_b times the dim x dim
 /// identity per node pair (stored entries only on the diagonal of each block), or lumped, the

@@ -1,10 +1,36 @@
 #pragma once
 /// @file Element kernels for P1 (Tri3, Tet4) and Q1 (Quad4, Hex8) elements, any anisotropic
 /// tensor. Strain vectors are Mandel (common/types.hpp), DOFs interleaved per node.
+#include <string>
+
 #include "coarsegrain/common/types.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 
 namespace coarsegrain::fem {
+
+/// The fine element's formulation (scene key "fem": {"formulation": ...}).
+enum class Formulation {
+    /// Displacement-based P1 / Q1 elements (Q1 with full 2^dim Gauss integration).
+    Standard,
+    /// Q1 with incompatible modes (Wilson, Taylor, Beresford and Wilson 1976, the QM6 / "C3D8I"
+    /// family): dim bubble modes per displacement component inside each element, condensed out.
+    /// Quad4 / Hex8 only. Bends without shear locking and does not lock near incompressibility
+    /// on regular meshes (docs/guide.md, "Near-incompressible materials"). On parallelepipeds it
+    /// is CalculiX's C3D8I; on distorted hexes it keeps Taylor's j0/j factor, which CalculiX
+    /// omits (src/fem/element_kernels.hpp, ModeMapping).
+    Incompatible,
+};
+
+/// "standard", "incompatible".
+std::string formulation_name(Formulation f);
+/// Parses a formulation name.
+/// @throws Error naming the allowed values if the name is unknown
+Formulation parse_formulation(const std::string& name);
+/// Whether formulation f is defined for elements of the given type (Incompatible: Quad4, Hex8).
+bool formulation_applies(Formulation f, mesh::ElementType type);
+/// @throws Error naming `fem.formulation`, the element type and the element types it allows,
+///         unless formulation_applies(f, type)
+void verify_formulation(Formulation f, mesh::ElementType type);
 
 /// Strain-displacement matrix B at reference point xi: mandel_size(dim) by npe*dim, mapping
 /// interleaved nodal displacements to the Mandel strain (e11 e22 [e33 √2e23 √2e13] √2e12).
@@ -17,12 +43,14 @@ Matrix strain_displacement(mesh::ElementType type, const Matrix& X, const Eigen:
                            double* detJ = nullptr);
 
 /// Element stiffness K_e = ∫ B^T C B: closed form for P1 (constant strain), 2x2 / 2x2x2 Gauss
-/// for Q1 (exact for parallelogram/parallelepiped elements).
+/// for Q1 (exact for parallelogram/parallelepiped elements). Formulation::Incompatible: the Q1
+/// stiffness enriched by the incompatible modes, condensed to the nodes (same Gauss points).
 /// @param[in] X  npe by dim corner positions (orderings as in mesh::ElementType)
 /// @param[in] C  mandel_size(dim) square elasticity tensor
 /// @return npe*dim square symmetric PSD matrix whose kernel holds the rigid motions
-/// @throws Error if the element is inverted or degenerate
-Matrix element_stiffness(mesh::ElementType type, const Matrix& X, const Matrix& C);
+/// @throws Error if the element is inverted or degenerate, or the formulation does not apply
+Matrix element_stiffness(mesh::ElementType type, const Matrix& X, const Matrix& C,
+                         Formulation formulation = Formulation::Standard);
 
 /// Element mass: consistent (∫ rho N_a N_b, times the dim x dim identity per node pair) or
 /// lumped (row sums on the diagonal). npe*dim square.

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 
 namespace coarsegrain::mra {
@@ -140,6 +141,10 @@ struct Options {
     /// more entries than all C̃^k together (128x128 quads, 3 levels: 12 GB), and basis() and
     /// reconstruct() give Φ^k and Φ^{k,T} u^k on demand from the C̃^k.
     bool store_bases = false;
+    /// The fine element (the scene's "fem" block), for the element matrices the construction
+    /// computes itself: the cell-localized solves' A_T and the coarsest cells' own hierarchies.
+    /// It must be that of the fine K given to build_hierarchy.
+    fem::Formulation formulation = fem::Formulation::Standard;
 };
 
 /// Largest Options::levels: a grid of up to 1e5 cells per axis halves at most 16 times.
@@ -158,7 +163,7 @@ void validate(const Options& options);
 /// @throws Error naming the axis
 void validate_grid(const Options& options, const Eigen::Vector3i& cells, int dim);
 
-/// Options of compare_levels, read from the scene's "coarse" block (parse_compare_options).
+/// Options of compare_levels: the scene keys coarse.spectrum_max_dofs and coarse.cell_tensors.
 struct CompareOptions {
     /// coarse.spectrum_max_dofs (integer >= 0): levels whose A^k or B^k has more rows get no
     /// condition number. Each spectrum costs a factorization and tens of Lanczos solves:

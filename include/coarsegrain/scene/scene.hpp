@@ -14,6 +14,7 @@
 
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
+#include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/homogenize/options.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
@@ -67,6 +68,8 @@ struct Scene {
     Eigen::VectorXd gravity;  ///< size dim (zero if absent)
     std::vector<BoxCondition> traction;
     std::vector<Eigen::VectorXd> probes;
+    /// "fem": {"formulation": ..}: the fine element (default standard; incompatible: hex/quad).
+    fem::Formulation formulation = fem::Formulation::Standard;
     solve::SolverOptions solver;
     /// The "coarse" block, parsed and validated (CoarseOptions).
     CoarseOptions coarse;
@@ -98,6 +101,9 @@ struct FineModel {
     SparseMatrix K;  ///< num_dofs square stiffness (no conditions applied)
     Vector f;        ///< num_dofs load: gravity + traction
     fem::Dirichlet bc;
+    /// One line per problem worth a user's attention (fem::locking_warnings), for stderr and
+    /// summary.json's "warnings".
+    std::vector<std::string> warnings;
 };
 
 /// The scene's Dirichlet boxes on `mesh`: the nodes inside each box, all components fixed at
