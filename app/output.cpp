@@ -4,7 +4,9 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
+#include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/io/file_util.hpp"
 
@@ -70,6 +72,49 @@ nlohmann::json probes_json(const scene::Scene& scene, const std::vector<Eigen::V
 void write_summary(const std::string& out_dir, const nlohmann::json& summary) {
     io::write_atomically((std::filesystem::path(out_dir) / "summary.json").string(),
                          [&](std::ostream& os) { os << summary.dump(2) << '\n'; });
+}
+
+namespace {
+
+constexpr const char* kManifest = ".coarsegrain_outputs";
+
+std::set<std::string> entries(const std::filesystem::path& dir) {
+    std::set<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+        names.insert(e.path().filename().string());
+    return names;
+}
+
+}  // namespace
+
+OutputFolder::OutputFolder(std::string dir) : dir_(std::move(dir)) {
+    namespace fs = std::filesystem;
+    io::ensure_writable_dir(dir_);
+    const fs::path manifest = fs::path(dir_) / kManifest;
+    std::ifstream in(manifest);
+    for (std::string name; std::getline(in, name);) {
+        // Only plain names of this folder's entries (never a path that leaves it).
+        if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos)
+            continue;
+        std::error_code ec;
+        fs::remove_all(fs::path(dir_) / name, ec);
+        CG_VERIFY(!ec, "cannot remove {} (an output of the previous run in {}): {}", name, dir_,
+                  ec.message());
+    }
+    fs::remove(manifest);
+    before_ = entries(dir_);
+}
+
+OutputFolder::~OutputFolder() {
+    try {
+        std::string list;
+        for (const std::string& name : entries(dir_))
+            if (!before_.count(name) && name != kManifest) list += name + "\n";
+        io::write_atomically((std::filesystem::path(dir_) / kManifest).string(),
+                             [&](std::ostream& os) { os << list; });
+    } catch (const std::exception&) {
+        // A folder that can no longer be listed or written keeps its files; nothing to undo.
+    }
 }
 
 }  // namespace coarsegrain::app

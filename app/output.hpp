@@ -1,6 +1,7 @@
 #pragma once
 /// Pieces shared by the commands' outputs: summary.json figures and the solution VTU fields.
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,24 @@ void print_warnings(const std::vector<std::string>& warnings);
 /// [{"point": [...], "u": [...]}, ...]; with `fine` given, also "u_fine" beside each "u".
 nlohmann::json probes_json(const scene::Scene& scene, const std::vector<Eigen::VectorXd>& u,
                            const std::vector<Eigen::VectorXd>* fine = nullptr);
+
+/// An output folder for one command's run. Opening it makes the folder (or checks that it is
+/// writable) and removes what the previous run listed in DIR/.coarsegrain_outputs; closing it
+/// (at the end of the run, also when it fails) lists there every entry of DIR the run created.
+/// So a folder never mixes two runs' outputs (a single-method summary.json beside an earlier
+/// comparison's report.md and method folders), and files a user put there are never touched.
+class OutputFolder {
+  public:
+    /// @throws Error if the folder cannot be made or written, or a listed entry not removed
+    explicit OutputFolder(std::string dir);
+    ~OutputFolder();
+    OutputFolder(const OutputFolder&) = delete;
+    OutputFolder& operator=(const OutputFolder&) = delete;
+
+  private:
+    std::string dir_;
+    std::set<std::string> before_;  ///< entries of the folder once the previous run's are gone
+};
 
 /// Writes DIR/summary.json atomically.
 void write_summary(const std::string& out_dir, const nlohmann::json& summary);

@@ -285,7 +285,7 @@ int run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
                 const std::string& out_dir, const std::string& command, double read_seconds) {
     if (methods.size() == 1) {
         coarsen::validate_method(sc, methods.front());
-        io::ensure_writable_dir(out_dir);
+        const OutputFolder folder(out_dir);
         run_one(sc, methods.front(), out_dir, read_seconds);
         return 0;
     }
@@ -302,7 +302,7 @@ int run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
         }
     }
     CG_VERIFY(!runnable.empty(), "no method can run on this scene: {}", first_error);
-    io::ensure_writable_dir(out_dir);
+    const OutputFolder folder(out_dir);
     return run_comparison(sc, methods, out_dir, command, read_seconds);
 }
 

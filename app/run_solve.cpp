@@ -12,7 +12,7 @@
 namespace coarsegrain::app {
 
 void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_seconds) {
-    io::ensure_writable_dir(out_dir);
+    const OutputFolder folder(out_dir);
     Timings t;
     t.add("read", read_seconds);
     const scene::FineModel model = scene::build_fine_model(sc, &t);
@@ -23,7 +23,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
     const double max_u = nodal_magnitude(sol.u, dim).maxCoeff();
     {
         const Phase phase("write", &t);
-        io::write_vtu((std::filesystem::path(out_dir) / "solution.vtu").string(), model.mesh,
+        io::write_vtu((std::filesystem::path(out_dir) / "solution_fine.vtu").string(), model.mesh,
                       solution_fields(model, sol.u));
     }
     nlohmann::json fine = fine_sizes(model);
@@ -54,7 +54,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
     for (std::size_t i = 0; i < probes.size(); ++i)
         std::printf("  u(%s) = (%s)\n", fmt::format("{:g}", fmt::join(sc.probes[i], ", ")).c_str(),
                     fmt::format("{:.6g}", fmt::join(probes[i], ", ")).c_str());
-    std::printf("  wrote %s/solution.vtu and %s/summary.json (peak memory %.0f MB)\n",
+    std::printf("  wrote %s/solution_fine.vtu and %s/summary.json (peak memory %.0f MB)\n",
                 out_dir.c_str(), out_dir.c_str(), peak_rss_mb());
 }
 

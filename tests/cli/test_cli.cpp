@@ -45,7 +45,7 @@ TEST(Cli, SolveWritesSummaryAndVtuWithTheContractKeys) {
     EXPECT_NEAR(s["strain_energy"].get<double>(), 0.5 * s["compliance"].get<double>(),
                 1e-9 * s["strain_energy"].get<double>());
 
-    const auto [m, fields] = io::read_vtu(dir + "/out/solution.vtu");
+    const auto [m, fields] = io::read_vtu(dir + "/out/solution_fine.vtu");
     EXPECT_EQ(m.num_nodes(), 9 * 5 * 5);
     std::vector<std::string> names;
     for (const auto& f : fields.point_data) names.push_back(f.name);
@@ -179,7 +179,7 @@ TEST_P(CliBadScene, FailsWithOneClearMessageAndNoOutput) {
     EXPECT_THAT(r.output, HasSubstr("error: "));
     EXPECT_THAT(r.output, HasSubstr(bad.message));
     EXPECT_FALSE(fs::exists(dir + "/out/summary.json"));
-    EXPECT_FALSE(fs::exists(dir + "/out/solution.vtu"));
+    EXPECT_FALSE(fs::exists(dir + "/out/solution_fine.vtu"));
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -182,6 +182,38 @@ TEST(CliCoarsen, AllRunsEveryMethodThatCanRun) {
     EXPECT_THAT(report, HasSubstr("| naive | failed: "));
 }
 
+// A run into a folder that holds an earlier run's outputs replaces them: nothing of the
+// comparison is left beside the single method's files, and the user's own files stay.
+TEST(CliCoarsen, AFolderNeverMixesTwoRuns) {
+    const std::string dir = temp_dir("cli_coarsen_rerun");
+    const std::string scene = write_scene(dir, coarse_scene());
+    const std::string out = dir + "/out";
+    std::string output;
+    ASSERT_EQ(run("COARSEGRAIN_PYTHON=false " + kCli +
+                      " --quiet coarsen " + scene + " --method naive,mra-dirac --out " + out,
+                  &output),
+              0)
+        << output;
+    ASSERT_TRUE(fs::exists(out + "/report.md"));
+    ASSERT_TRUE(fs::exists(out + "/mra-dirac/summary.json"));
+    std::ofstream(out + "/notes.txt") << "mine";
+    ASSERT_EQ(run(kCli + " --quiet coarsen " + scene + " --method naive --out " + out, &output), 0)
+        << output;
+    EXPECT_FALSE(fs::exists(out + "/report.md"));
+    EXPECT_FALSE(fs::exists(out + "/report_data.json"));
+    EXPECT_FALSE(fs::exists(out + "/naive"));
+    EXPECT_FALSE(fs::exists(out + "/mra-dirac"));
+    EXPECT_TRUE(fs::exists(out + "/solution_coarse.vtu"));
+    EXPECT_TRUE(fs::exists(out + "/notes.txt"));
+    EXPECT_EQ(read_json(out + "/summary.json")["method"], "naive");
+    // The same for `solve`: its files replace the coarsening's.
+    ASSERT_EQ(run(kCli + " --quiet solve " + scene + " --out " + out, &output), 0) << output;
+    EXPECT_FALSE(fs::exists(out + "/solution_coarse.vtu"));
+    EXPECT_FALSE(fs::exists(out + "/coarse_model.vtu"));
+    EXPECT_TRUE(fs::exists(out + "/solution_fine.vtu"));
+    EXPECT_TRUE(fs::exists(out + "/notes.txt"));
+}
+
 TEST(CliCoarsen, MethodListErrors) {
     const std::string dir = temp_dir("cli_coarsen_method_list");
     const std::string scene = write_scene(dir, coarse_scene());
