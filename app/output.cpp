@@ -110,6 +110,7 @@ OutputFolder::~OutputFolder() {
         std::string list;
         for (const std::string& name : entries(dir_))
             if (!before_.count(name) && name != kManifest) list += name + "\n";
+        if (list.empty()) return;  // a run that wrote nothing leaves nothing
         io::write_atomically((std::filesystem::path(dir_) / kManifest).string(),
                              [&](std::ostream& os) { os << list; });
     } catch (const std::exception&) {
