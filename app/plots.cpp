@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <system_error>
+#include <vector>
 
 namespace coarsegrain::app {
 
@@ -37,12 +39,36 @@ int run_captured(const std::string& command, std::string& output) {
     return pclose(pipe);
 }
 
+/// Folders that may hold the plotting scripts, in the order they are tried: $COARSEGRAIN_SCRIPTS
+/// alone if set; else, relative to this executable's folder (/proc/self/exe, symbolic links
+/// resolved), an install's <prefix>/share/coarsegrain/scripts beside <prefix>/bin, then the
+/// build tree's link to the source scripts/ (made by CMake next to the executable). No source
+/// path is compiled in.
+std::vector<std::filesystem::path> script_dirs() {
+    namespace fs = std::filesystem;
+    if (const char* v = std::getenv("COARSEGRAIN_SCRIPTS"); v && *v) return {fs::path(v)};
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (ec || exe.empty()) return {};
+    const fs::path dir = exe.parent_path();
+    return {(dir / COARSEGRAIN_SCRIPTS_INSTALL_RELATIVE).lexically_normal(),
+            (dir / COARSEGRAIN_SCRIPTS_BUILD_RELATIVE).lexically_normal()};
+}
+
 }  // namespace
 
 bool make_plot(const std::string& out_dir, const coarsen::PlotOutput& plot) {
     namespace fs = std::filesystem;
-    const fs::path script =
-        fs::path(env_or("COARSEGRAIN_SCRIPTS", COARSEGRAIN_SCRIPTS_DIR)) / plot.script;
+    const std::vector<fs::path> dirs = script_dirs();
+    // The first folder holding the script; if none does, the first one, for the messages.
+    fs::path script = dirs.empty() ? fs::path(plot.script) : dirs.front() / plot.script;
+    for (const fs::path& d : dirs) {
+        std::error_code ec;
+        if (fs::is_regular_file(d / plot.script, ec)) {
+            script = d / plot.script;
+            break;
+        }
+    }
     std::string command = python() + " " + shell_quote(fs::absolute(script).string());
     for (const std::string& a : plot.args) {
         command += ' ';
@@ -60,13 +86,18 @@ bool make_plot(const std::string& out_dir, const coarsen::PlotOutput& plot) {
         if (!files.empty()) files += ", ";
         files += f;
     }
-    const std::string reason = !fs::exists(script) ? "script " + script.string() + " not found"
-                               : output.empty()    ? "exit status " + std::to_string(status)
-                                                   : output.substr(0, output.find('\n'));
-    std::fprintf(stderr,
-                 "note: %s not made (needs Python 3 with matplotlib; %s). To make it: cd %s && "
-                 "%s\n",
-                 files.c_str(), reason.c_str(), shell_quote(out_dir).c_str(), command.c_str());
+    std::string searched;
+    for (const fs::path& d : dirs) searched += (searched.empty() ? "" : ", ") + d.string();
+    const std::string reason =
+        !fs::exists(script)
+            ? "script " + plot.script + " not found in " +
+                  (searched.empty() ? "(no folder)" : searched) +
+                  "; set COARSEGRAIN_SCRIPTS to the folder holding it"
+            : "needs Python 3 with matplotlib; " +
+                  (output.empty() ? "exit status " + std::to_string(status)
+                                  : output.substr(0, output.find('\n')));
+    std::fprintf(stderr, "note: %s not made (%s). To make it: cd %s && %s\n", files.c_str(),
+                 reason.c_str(), shell_quote(out_dir).c_str(), command.c_str());
     return false;
 }
 

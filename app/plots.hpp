@@ -9,7 +9,9 @@ namespace coarsegrain::app {
 /// Runs `python3 <scripts>/<plot.script> <plot.args...>` in `out_dir` and returns whether every
 /// file of plot.files was made. The interpreter is $COARSEGRAIN_PYTHON, else /usr/bin/python3
 /// if present (Debian's, with numpy and matplotlib), else python3 from PATH; the scripts folder
-/// is $COARSEGRAIN_SCRIPTS, else the source tree's scripts/ this binary was built from. A
+/// is $COARSEGRAIN_SCRIPTS, else found from this executable's location: an install's
+/// <prefix>/share/coarsegrain/scripts (from <prefix>/bin), else the build tree's `scripts` link
+/// to the source tree's scripts/ (beside build/release/coarsegrain). A
 /// missing script or interpreter, or a script that fails (matplotlib absent), is not an error:
 /// a note on stderr names the files not made, the script's message and the command that makes
 /// them.

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# The whole test suite: set up, build, run every test (Release), then a fast subset under
-# AddressSanitizer + UndefinedBehaviorSanitizer. With COARSEGRAIN_FUZZ_SECONDS=N it also fuzzes
-# the mesh readers and the scene loader for N seconds each (scripts/fuzz.sh; a third, clang,
-# build).
+# The whole test suite: set up, build, run every test (Release), test the installed package
+# (scripts/test_install.sh), then a fast subset under AddressSanitizer +
+# UndefinedBehaviorSanitizer. With COARSEGRAIN_FUZZ_SECONDS=N it also fuzzes the mesh readers
+# and the scene loader for N seconds each (scripts/fuzz.sh; a third, clang, build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -14,6 +14,9 @@ export OPENBLAS_NUM_THREADS=1
 echo "== release build and full test suite" >&2
 scripts/build.sh release
 ctest --test-dir build/release --output-on-failure -j "$jobs"
+
+echo "== the installed package: cmake --install, a find_package consumer, the installed tool" >&2
+scripts/test_install.sh build/release
 
 echo "== sanitizer build (ASan + UBSan), fast subset" >&2
 scripts/build.sh asan coarsegrain_tests coarsegrain_cli
