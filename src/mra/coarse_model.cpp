@@ -244,10 +244,14 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
 }
 
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
-                                       const nlohmann::json& build_levels,
+                                       const Vector& u, const nlohmann::json& build_levels,
                                        const CompareOptions& options) {
     const int q = h.num_levels();
-    const Diagnostics d = diagnose(h, fine.f, {options.max_spectrum_dofs, true});
+    DiagnoseOptions diagnose_options{options.max_spectrum_dofs, true};
+    const bool penalized = h.options.dirichlet == DirichletTreatment::Penalty ||
+                           h.options.dirichlet == DirichletTreatment::DiagonalPenalty;
+    if (!penalized) diagnose_options.fine_solution = &u;  // the run's own fine solve
+    const Diagnostics d = diagnose(h, fine.f, diagnose_options);
     coarsen::FineComparison c;
     nlohmann::json levels = nlohmann::json::array();
     for (int k = 1; k <= q; ++k) {
@@ -292,8 +296,8 @@ coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOpt
         build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
     coarsen::CoarseModel m = coarse_model(h, fine.f);
     m.compare_with_fine = [h, build_levels = m.report["levels"], compare](
-                              const scene::Scene&, const scene::FineModel& f, const Vector&) {
-        return compare_levels(*h, f, build_levels, compare);
+                              const scene::Scene&, const scene::FineModel& f, const Vector& u) {
+        return compare_levels(*h, f, u, build_levels, compare);
     };
     return m;
 }

@@ -128,7 +128,17 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
     const double g_norm = restrict_to(g_fine, h.fine_dofs).norm();
     CG_VERIFY(g_norm > 0, "mra diagnostics: the load is zero on the hierarchy's DOFs");
     MultilevelSolver solver(h);
-    const Vector u_grid = solver.solve_level(g_fine, q);
+    const bool penalized = h.options.dirichlet == DirichletTreatment::Penalty ||
+                           h.options.dirichlet == DirichletTreatment::DiagonalPenalty;
+    CG_VERIFY(!options.fine_solution || !penalized,
+              "mra diagnostics: the {} treatment solves its own fine problem; give no fine "
+              "solution",
+              dirichlet_name(h.options.dirichlet));
+    CG_VERIFY(!options.fine_solution || options.fine_solution->size() == h.fine_grid_dofs(),
+              "mra diagnostics: the fine solution has {} entries, the fine grid {} DOFs",
+              options.fine_solution ? options.fine_solution->size() : 0, h.fine_grid_dofs());
+    const Vector u_grid =
+        options.fine_solution ? *options.fine_solution : solver.solve_level(g_fine, q);
     const Vector u = restrict_to(u_grid, h.fine_dofs);
     const double u_norm = energy_norm(h.A_fine, u);
     Diagnostics d;

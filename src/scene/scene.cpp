@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 
 #include "coarsegrain/fem/assembly.hpp"
@@ -462,6 +463,7 @@ Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
 
 FineModel build_fine_model(const Scene& scene, Timings* timings) {
     FineModel m;
+    m.source = scene.source;
     m.mesh = scene.mesh;
     {
         const Phase phase("assemble", timings);
@@ -479,12 +481,82 @@ FineModel build_fine_model(const Scene& scene, Timings* timings) {
     return m;
 }
 
+namespace {
+
+/// Connected parts of a mesh (nodes sharing an element): the part of each node, 0..parts-1.
+std::vector<Index> mesh_parts(const mesh::Mesh& m, Index& parts) {
+    std::vector<Index> root(static_cast<std::size_t>(m.num_nodes()));
+    for (Index v = 0; v < m.num_nodes(); ++v) root[static_cast<std::size_t>(v)] = v;
+    const auto find = [&root](Index v) {
+        while (root[static_cast<std::size_t>(v)] != v)
+            v = root[static_cast<std::size_t>(v)] =
+                root[static_cast<std::size_t>(root[static_cast<std::size_t>(v)])];
+        return v;
+    };
+    for (Index e = 0; e < m.num_elements(); ++e)
+        for (Eigen::Index a = 1; a < m.elements.cols(); ++a)
+            root[static_cast<std::size_t>(find(m.elements(e, a)))] = find(m.elements(e, 0));
+    std::vector<Index> part(root.size(), -1), label(root.size(), -1);
+    parts = 0;
+    for (Index v = 0; v < m.num_nodes(); ++v) {
+        Index& l = label[static_cast<std::size_t>(find(v))];
+        if (l < 0) l = parts++;
+        part[static_cast<std::size_t>(v)] = l;
+    }
+    return part;
+}
+
+/// Why the fine stiffness with its Dirichlet conditions is singular, for the error message: a
+/// connected part of the mesh without any Dirichlet DOF moves freely; if every part has some,
+/// the likely cause is round-off at the materials' stiffness contrast (or a part held at too
+/// few nodes to stop its rotations).
+std::string singular_cause(const FineModel& model) {
+    const mesh::Mesh& m = model.mesh;
+    Index parts = 0;
+    const std::vector<Index> part = mesh_parts(m, parts);
+    std::vector<char> held(static_cast<std::size_t>(parts), 0);
+    for (const Index dof : model.bc.dofs)
+        held[static_cast<std::size_t>(part[static_cast<std::size_t>(dof / m.dim())])] = 1;
+    for (Index p = 0; p < parts; ++p) {
+        if (held[static_cast<std::size_t>(p)]) continue;
+        Index nodes = 0;
+        Eigen::VectorXd sum = Eigen::VectorXd::Zero(m.dim());
+        for (Index v = 0; v < m.num_nodes(); ++v)
+            if (part[static_cast<std::size_t>(v)] == p) {
+                ++nodes;
+                sum += m.rest_positions.row(v).transpose();
+            }
+        return fmt::format(
+            "part {} of the mesh's {} connected parts ({} nodes, centred at ({:.4g})) has no "
+            "Dirichlet node and can move freely; add a dirichlet box that touches it",
+            p + 1, parts, nodes, fmt::join(sum / static_cast<double>(nodes), ", "));
+    }
+    double e_min = std::numeric_limits<double>::infinity(), e_max = 0;
+    for (const material::Material& mat : model.materials.table) {
+        e_min = std::min(e_min, mat.E);
+        e_max = std::max(e_max, mat.E);
+    }
+    return fmt::format(
+        "every connected part of the mesh ({}) has Dirichlet nodes, so either a part is held at "
+        "too few nodes to stop its rotations, or K is singular to round-off: the materials' "
+        "Young's moduli span a contrast of {:.3g} ({:.3g} to {:.3g}); above about 1e10 the "
+        "factorization cannot tell the soft material from a free one",
+        parts, e_max / e_min, e_min, e_max);
+}
+
+}  // namespace
+
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
                             Timings* timings) {
     solve::SolverOptions node_options = options;
     node_options.node_dofs = model.mesh.dim();  // K is interleaved per node
     StaticSolution s;
-    s.u = fem::solve_static(model.K, model.f, model.bc, node_options, timings);
+    try {
+        s.u = fem::solve_static(model.K, model.f, model.bc, node_options, timings);
+    } catch (const NotPositiveDefinite& e) {
+        throw NotPositiveDefinite(fmt::format("{}: the fine model is singular: {} ({})",
+                                              model.source, singular_cause(model), e.what()));
+    }
     s.strain_energy = fem::strain_energy(model.K, s.u);
     return s;
 }

@@ -272,6 +272,9 @@ TEST(CliCoarsen, EffectiveTensorWritesItsPhasesAndFiles) {
     EXPECT_EQ(s["coarse"]["boundary"], "neumann");
     EXPECT_EQ(s["coarse"]["map"], "barycentric");
     EXPECT_TRUE(s["speedup"]["solve"].is_number());
+    // The coarse grid's nodes are fine nodes (on the boundary and inside): none lies outside,
+    // whatever the round-off of locating them.
+    EXPECT_EQ(s["coarse"]["coarse_nodes_outside"], 0);
 
     const auto [coarse, cells] = io::read_vtu(dir + "/out/coarse_model.vtu");
     EXPECT_EQ(coarse.num_elements(), s["coarse"]["elements"].get<int>());

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/mra/diagnostics.hpp"
 #include "mra_test_util.hpp"
 #include "test_util.hpp"
@@ -96,6 +97,20 @@ TEST(MraDiagnostics, ErrorSparsityAndStorage) {
         EXPECT_EQ(L.build_seconds, lev.build_seconds);
     }
     test::expect_error([&] { diagnose(h, Vector::Zero(3)); }, "load has 3 entries");
+
+    // Given the fine solution of another solve of the same fine problem (the runtime's,
+    // conditions eliminated), every level's error is the same up to the two solves' round-off
+    // (1e-10 relative: the fine problem's condition number here is about 1e5).
+    const Vector u = fem::solve_static(p.K, p.f, p.bc, {});
+    DiagnoseOptions given;
+    given.fine_solution = &u;
+    const Diagnostics d2 = diagnose(h, p.f, given);
+    for (std::size_t k = 0; k + 1 < d.levels.size(); ++k)
+        EXPECT_NEAR(d2.levels[k].error_over_u, d.levels[k].error_over_u,
+                    1e-10 * d.levels[k].error_over_u);
+    const Vector short_u = Vector::Zero(3);
+    given.fine_solution = &short_u;
+    test::expect_error([&] { diagnose(h, p.f, given); }, "the fine solution has 3 entries");
 }
 
 /// Writes the CSV of each refinement of `p` (exact hierarchy, `levels` levels) into `dir`,

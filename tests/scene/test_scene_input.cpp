@@ -154,15 +154,39 @@ TEST(SceneInput, RootLevelErrorsNameNoEmptyKey) {
     }
 }
 
+// A singular fine model says why: here a part of the mesh no Dirichlet box touches, named by
+// its size and centre.
+TEST(SceneInput, SingularModelsNameTheirCause) {
+    const std::string dir = test::temp_dir("scene_singular");
+    {
+        std::ofstream mesh(dir + "/two_blocks.mesh");
+        mesh << "MeshVersionFormatted 1\nDimension 3\nVertices\n16\n";
+        for (const double x0 : {0.0, 3.0})
+            for (int k = 0; k < 2; ++k)
+                for (int j = 0; j < 2; ++j)
+                    for (int i = 0; i < 2; ++i) mesh << x0 + i << " " << j << " " << k << " 0\n";
+        mesh << "Hexahedra\n2\n1 2 4 3 5 6 8 7 1\n9 10 12 11 13 14 16 15 1\nEnd\n";
+    }
+    json j = json::parse(R"({
+      "mesh": { "file": "two_blocks.mesh" },
+      "materials": { "1": { "E": 100, "nu": 0.3, "density": 1 } },
+      "dirichlet": [ { "box": { "min": [-1, -1, -1], "max": [0, 2, 2] } } ],
+      "loads": { "gravity": [0, 0, -1] }
+    })");
+    const scene::Scene free = scene::parse_scene(j, "two.json", dir);
+    test::expect_error([&] { scene::solve_static(scene::build_fine_model(free), {}); },
+                       "two.json: the fine model is singular: part 2 of the mesh's 2 connected "
+                       "parts (8 nodes, centred at (3.5, 0.5, 0.5)) has no Dirichlet node");
+}
+
 std::vector<std::uint8_t> file_bytes(const fs::path& file) {
     std::ifstream in(file, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 // The fuzz target's seeds (the examples' scenes and two more) load but for missing files; the
-// inputs it once
-// crashed on now load or throw coarsegrain::Error, and nothing else (the sanitizer build runs
-// this too).
+// inputs it once crashed on now load or throw coarsegrain::Error, and nothing else (the
+// sanitizer build runs this too).
 TEST(SceneInput, FuzzSeedsLoadAndRegressionsAreReported) {
     const fs::path root = fs::path(COARSEGRAIN_TEST_DATA) / ".." / "..";
     int seeds = 0;

@@ -23,7 +23,9 @@ CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions
 /// How far a coarse solution carried to the fine mesh, u_c, is from the fine solution u.
 struct Errors {
     double energy_rel = 0;            ///< ||u_c - u||_K / ||u||_K, K the fine stiffness
-    double energy_over_load = 0;      ///< ||u_c - u||_K / ||g||_2 (Chen 2019, Fig. 9, Table 1)
+    /// ||u_c - u||_K / ||g||_2 with g the load on the free DOFs (Chen 2019, Fig. 9, Table 1;
+    /// the hierarchy's diagnostics normalise the same way)
+    double energy_over_load = 0;
     double l2_rel = 0;                ///< |u_c - u|_2 / |u|_2 over the fine nodes
     double max_displacement_rel = 0;  ///< |max_i |u_c,i| - max_i |u_i|| / max_i |u_i|
     double compliance_ratio = 0;      ///< f.u_c / f.u: 1 is perfect, below 1 too stiff

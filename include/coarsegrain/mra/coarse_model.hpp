@@ -28,9 +28,10 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, con
 /// cells (one small free-body hierarchy each).
 inline constexpr Index kCellTensorsMaxCells = 1024;
 
-/// Figures of every level of `h` against the fine solution, for the summary of
-/// `coarsen --method mra`: mra::diagnose for the load fine.f with DiagnoseOptions
-/// {options.max_spectrum_dofs, keep_solutions}. The report's "levels" has q entries, level k at
+/// Figures of every level of `h` against the fine solution `u` (over all fine DOFs, the run's
+/// own fine solve), for the summary of `coarsen --method mra`: mra::diagnose for the load
+/// fine.f with DiagnoseOptions {options.max_spectrum_dofs, keep_solutions, &u} (without u for
+/// the penalty treatments, whose fine problem is their own). The report's "levels" has q entries, level k at
 /// index k-1: `build_levels[k-1]` (the coarse_model report of level k; for level q its cells, nodes
 /// and the nonzeros of A^q) updated with to_json of the level's diagnostics; "spectrum_max_dofs"
 /// states the limit. Each level's single-level solve u^k = Φ^{k,T} (A^k)^{-1} g^k (Sec. 4.1)
@@ -47,7 +48,7 @@ inline constexpr Index kCellTensorsMaxCells = 1024;
 /// E_max over all cells and directions, and per cell "E_axes", "E_min", "E_max". Skipped (with
 /// "skipped" saying why) above kCellTensorsMaxCells cells or if !options.cell_tensors.
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
-                                       const nlohmann::json& build_levels,
+                                       const Vector& u, const nlohmann::json& build_levels,
                                        const CompareOptions& options);
 
 /// Builds the hierarchy of the fine model with `options` and returns the coarsest level as a

@@ -53,6 +53,11 @@ struct DiagnoseOptions {
     /// sparse factorization and tens of Lanczos solves with it.
     Index max_spectrum_dofs = std::numeric_limits<Index>::max();
     bool keep_solutions = false;  ///< fill Diagnostics::solutions
+    /// The fine solution u^q over all fine grid DOFs, if the caller has it (the runtime's fine
+    /// solve): the fine level is then not factorized and solved again. It must solve the
+    /// hierarchy's own fine problem: the eliminate, constrain or ignore treatment (the penalty
+    /// treatments solve a penalized one).
+    const Vector* fine_solution = nullptr;
 };
 
 /// Extreme eigenvalues of a symmetric positive-definite sparse matrix.

@@ -95,6 +95,7 @@ Scene parse_scene(const nlohmann::json& j, const std::string& source, const std:
 
 /// The fine FEM model of a scene: mesh, materials, stiffness, load and Dirichlet conditions.
 struct FineModel {
+    std::string source;  ///< the scene's file name (or "demo"), for messages
     mesh::Mesh mesh;
     material::ElementMaterials materials;
     mesh::Boundary boundary;
@@ -131,7 +132,8 @@ struct StaticSolution {
 };
 
 /// Solves K u = f with the Dirichlet conditions eliminated. Phases "factorize" and "solve".
-/// @throws NotPositiveDefinite if the conditions do not hold the structure
+/// @throws NotPositiveDefinite naming the source and the cause: a connected part of the mesh
+///         without a Dirichlet node (its size and centre), or else the materials' contrast
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
                             Timings* timings = nullptr);
 
