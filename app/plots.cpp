@@ -57,7 +57,20 @@ std::vector<std::filesystem::path> script_dirs() {
 
 }  // namespace
 
-bool make_plot(const std::string& out_dir, const coarsen::PlotOutput& plot) {
+std::vector<PlotOutput> table_plots(const io::Table& table) {
+    const std::string csv = table.name + ".csv";
+    if (table.name == "mra_levels")
+        return {{"plot_mra.py",
+                 {"mra_errors.png", csv, "--cond", "mra_condition.png"},
+                 {"mra_errors.png", "mra_condition.png"}}};
+    if (table.name == "coarsest_youngs")
+        return {{"plot_youngs.py", {"coarsest_youngs.png", csv}, {"coarsest_youngs.png"}}};
+    if (table.name == "coarsest_stress")
+        return {{"plot_stress.py", {"coarsest_stress.png", csv}, {"coarsest_stress.png"}}};
+    return {};
+}
+
+bool make_plot(const std::string& out_dir, const PlotOutput& plot) {
     namespace fs = std::filesystem;
     const std::vector<fs::path> dirs = script_dirs();
     // The first folder holding the script; if none does, the first one, for the messages.

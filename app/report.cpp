@@ -189,7 +189,7 @@ nlohmann::json write_report(const scene::Scene& sc, const std::string& command, 
     const Phase phase("report");
     write_report_data(sc, f, results, dir / "report_data.json");
     nlohmann::json made = nlohmann::json::array();
-    const auto plot = [&](const coarsen::PlotOutput& p) {
+    const auto plot = [&](const PlotOutput& p) {
         if (make_plot(dir.string(), p))
             for (const std::string& file : p.files) made.push_back(file);
     };

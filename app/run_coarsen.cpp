@@ -85,7 +85,8 @@ nlohmann::json write_solution(const fs::path& dir, const std::string& name, cons
 }
 
 // The method's figures and files that need the fine solution (CoarseModel::compare_with_fine):
-// merged into `coarse_json`, written to `dir`; plots are made last. Returns the plot images
+// its report's keys replace those of `coarse_json`, its files and tables (as CSV) are written to
+// `dir`, and the tables' plots are made last. Returns the plot images
 // made. The phase "compare" goes to `timings`.
 nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene::Scene& sc,
                                  const scene::FineModel& fine, const Vector& u, const fs::path& dir,
@@ -94,15 +95,17 @@ nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene
     if (!coarse.compare_with_fine) return made;
     const Phase phase("compare", &timings);
     const coarsen::FineComparison c = coarse.compare_with_fine(sc, fine, u);
-    coarse_json.merge_patch(c.report);
+    coarse_json.update(c.report);
     for (const coarsen::Reconstruction& r : c.reconstructions)
-        coarse_json[nlohmann::json::json_pointer(r.report_pointer)].update(
-            write_solution(dir, r.name, sc, fine, u, r.u));
+        coarse_json.at("levels").at(r.level).update(write_solution(dir, r.name, sc, fine, u, r.u));
     for (const coarsen::VtuOutput& o : c.outputs)
         io::write_vtu((dir / o.file).string(), o.mesh, o.fields);
-    for (const coarsen::FileOutput& f : c.files)
-        io::write_atomically((dir / f.file).string(), [&](std::ostream& os) { os << f.content; });
-    for (const coarsen::PlotOutput& p : c.plots)
+    std::vector<PlotOutput> plots;
+    for (const io::Table& t : c.tables) {
+        io::write_csv(t, (dir / (t.name + ".csv")).string());
+        for (PlotOutput& p : table_plots(t)) plots.push_back(std::move(p));
+    }
+    for (const PlotOutput& p : plots)
         if (make_plot(dir.string(), p))
             for (const std::string& file : p.files) made.push_back(file);
     return made;

@@ -3,8 +3,8 @@
 
 Usage: /usr/bin/python3 scripts/plot_mra.py OUT.png A.csv [B.csv ...] [--cond COND.png]
 
-Each CSV is written by coarsegrain::mra::write_csv (one row per level). OUT.png gets the
-homogenization error ||u^k - u||_A / ||g||_2 against the level (log y, Fig. 9), one line per
+Each CSV is a table mra_levels.csv (coarsegrain::mra::levels_table, one row per level).
+OUT.png gets the homogenization error ||u^k - u||_A / ||g||_2 against the level (log y, Fig. 9), one line per
 CSV labelled by its file name (by its folder's name if several files share one); --cond additionally writes cond(A^k) and cond(B^k) (Fig. 8).
 """
 import os

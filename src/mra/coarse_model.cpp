@@ -99,25 +99,27 @@ void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const 
                         fem::mandel_to_physical(cell_mean_stress(fine, u1, cells)));
     out.fields.add_cell("stress_fine", fem::mandel_to_physical(cell_mean_stress(fine, u, cells)));
     c.outputs.push_back(std::move(out));
-    std::string csv = dim == 2 ? "cell,dx,dy,E\n" : "cell,dx,dy,dz,E\n";
+    io::Table youngs{"coarsest_youngs",
+                     dim == 2 ? std::vector<std::string>{"cell", "dx", "dy", "E"}
+                              : std::vector<std::string>{"cell", "dx", "dy", "dz", "E"},
+                     Matrix(nc * D.rows(), dim + 2)};
     for (Index i = 0; i < nc; ++i)
-        for (Index j = 0; j < D.rows(); ++j)
-            csv += fmt::format("{},{:.17g},{:.17g},{}{:.17g}\n", i, D(j, 0), D(j, 1),
-                               dim == 3 ? fmt::format("{:.17g},", D(j, 2)) : "", E_dir(i, j));
-    c.files.push_back({"coarsest_youngs.csv", csv});
-    c.plots.push_back({"plot_youngs.py",
-                       {"coarsest_youngs.png", "coarsest_youngs.csv"},
-                       {"coarsest_youngs.png"}});
+        for (Index j = 0; j < D.rows(); ++j) {
+            const Index row = i * D.rows() + j;
+            youngs.values(row, 0) = static_cast<double>(i);
+            youngs.values.row(row).segment(1, dim) = D.row(j).head(dim);
+            youngs.values(row, dim + 1) = E_dir(i, j);
+        }
+    c.tables.push_back(std::move(youngs));
     report["vtu"] = "coarsest_cells.vtu";
     report["E_min"] = E_dir.minCoeff();
     report["E_max"] = E_dir.maxCoeff();
     report["per_cell"] = per_cell;
 }
 
-/// Fig. 16 (2D): coarsest_stress.csv, one row per fine element with its centroid, its area, its
-/// Young's modulus E and the physical stress (xx, yy, xy) and von Mises stress of the fine solve u
-/// and of the coarsest level's reconstruction u1 on the fine grid; scripts/plot_stress.py draws
-/// both stress fields and their difference to coarsest_stress.png.
+/// Fig. 16 (2D): the table "coarsest_stress", one row per fine element with its centroid, its
+/// area, its Young's modulus E and the physical stress (xx, yy, xy) and von Mises stress of the
+/// fine solve u and of the coarsest level's reconstruction u1 on the fine grid.
 void add_stress_map(const scene::FineModel& fine, const Vector& u1, const Vector& u,
                     coarsen::FineComparison& c) {
     const fem::ElementStress s = fem::element_stress(fine.mesh, fine.materials, u);
@@ -125,19 +127,15 @@ void add_stress_map(const scene::FineModel& fine, const Vector& u1, const Vector
     const Matrix p = fem::mandel_to_physical(s.stress);
     const Matrix p1 = fem::mandel_to_physical(s1.stress);
     const Matrix x = mesh::element_centroids(fine.mesh);
-    std::string csv =
-        "x,y,area,E,fine_xx,fine_yy,fine_xy,fine_von_mises,coarse_xx,coarse_yy,coarse_xy,"
-        "coarse_von_mises\n";
+    io::Table t{"coarsest_stress",
+                {"x", "y", "area", "E", "fine_xx", "fine_yy", "fine_xy", "fine_von_mises",
+                 "coarse_xx", "coarse_yy", "coarse_xy", "coarse_von_mises"},
+                Matrix(fine.mesh.num_elements(), 12)};
     for (Index e = 0; e < fine.mesh.num_elements(); ++e)
-        csv += fmt::format(
-            "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
-            "{:.9g},{:.9g}\n",
-            x(e, 0), x(e, 1), mesh::element_measure(fine.mesh, e), fine.materials.of(e).E, p(e, 0),
-            p(e, 1), p(e, 2), s.von_mises[e], p1(e, 0), p1(e, 1), p1(e, 2), s1.von_mises[e]);
-    c.files.push_back({"coarsest_stress.csv", csv});
-    c.plots.push_back({"plot_stress.py",
-                       {"coarsest_stress.png", "coarsest_stress.csv"},
-                       {"coarsest_stress.png"}});
+        t.values.row(e) << x(e, 0), x(e, 1), mesh::element_measure(fine.mesh, e),
+            fine.materials.of(e).E, p(e, 0), p(e, 1), p(e, 2), s.von_mises[e], p1(e, 0), p1(e, 1),
+            p1(e, 2), s1.von_mises[e];
+    c.tables.push_back(std::move(t));
 }
 
 template <class M>
@@ -272,14 +270,11 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
         levels.push_back(entry);
         c.reconstructions.push_back({fmt::format("level_{}", k),
                                      d.solutions[static_cast<std::size_t>(k - 1)],
-                                     fmt::format("/levels/{}", k - 1)});
+                                     static_cast<std::size_t>(k - 1)});
     }
     c.report["levels"] = levels;
     c.report["spectrum_max_dofs"] = options.max_spectrum_dofs;
-    c.files.push_back({"mra_levels.csv", to_csv(d)});
-    c.plots.push_back({"plot_mra.py",
-                       {"mra_errors.png", "mra_levels.csv", "--cond", "mra_condition.png"},
-                       {"mra_errors.png", "mra_condition.png"}});
+    c.tables.push_back(levels_table(d));
     add_coarsest_cells(h, fine, d.solutions.front(), d.solutions.back(), options.cell_tensors, c);
     if (h.dim == 2) add_stress_map(fine, d.solutions.front(), d.solutions.back(), c);
     return c;

@@ -188,24 +188,24 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
     return d;
 }
 
-std::string to_csv(const Diagnostics& d) {
-    std::string s =
-        "level,dofs,wavelets,error_over_g,error_over_u,lambda_min_A,lambda_max_A,cond_A,"
-        "lambda_min_B,lambda_max_B,cond_B,sparsity_A,sparsity_B,sparsity_C,bytes_Phi,"
-        "bytes_Psi,bytes_C,bytes_A,bytes_B,build_seconds,spectrum_skipped\n";
-    for (const LevelDiagnostics& L : d.levels)
-        s += fmt::format(
-            "{},{},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
-            "{:.17g},{:.17g},{},{},{},{},{},{:.17g},{:d}\n",
-            L.k, L.dofs, L.wavelets, L.error_over_g, L.error_over_u, L.lambda_min_A, L.lambda_max_A,
-            L.cond_A, L.lambda_min_B, L.lambda_max_B, L.cond_B, L.sparsity_A, L.sparsity_B,
-            L.sparsity_C, L.bytes_Phi, L.bytes_Psi, L.bytes_C, L.bytes_A, L.bytes_B,
-            L.build_seconds, static_cast<int>(L.spectrum_skipped));
-    return s;
-}
-
-void write_csv(const Diagnostics& d, const std::string& file) {
-    io::write_atomically(file, [&](std::ostream& os) { os << to_csv(d); });
+io::Table levels_table(const Diagnostics& d) {
+    io::Table t{"mra_levels",
+                {"level",        "dofs",         "wavelets",     "error_over_g", "error_over_u",
+                 "lambda_min_A", "lambda_max_A", "cond_A",       "lambda_min_B", "lambda_max_B",
+                 "cond_B",       "sparsity_A",   "sparsity_B",   "sparsity_C",   "bytes_Phi",
+                 "bytes_Psi",    "bytes_C",      "bytes_A",      "bytes_B",      "build_seconds",
+                 "spectrum_skipped"},
+                Matrix(static_cast<Index>(d.levels.size()), 21)};
+    for (std::size_t i = 0; i < d.levels.size(); ++i) {
+        const LevelDiagnostics& L = d.levels[i];
+        t.values.row(static_cast<Index>(i)) << L.k, L.dofs, L.wavelets, L.error_over_g,
+            L.error_over_u, L.lambda_min_A, L.lambda_max_A, L.cond_A, L.lambda_min_B,
+            L.lambda_max_B, L.cond_B, L.sparsity_A, L.sparsity_B, L.sparsity_C,
+            static_cast<double>(L.bytes_Phi), static_cast<double>(L.bytes_Psi),
+            static_cast<double>(L.bytes_C), static_cast<double>(L.bytes_A),
+            static_cast<double>(L.bytes_B), L.build_seconds, L.spectrum_skipped ? 1.0 : 0.0;
+    }
+    return t;
 }
 
 nlohmann::json to_json(const LevelDiagnostics& L) {

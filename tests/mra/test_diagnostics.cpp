@@ -122,7 +122,7 @@ std::string check_csvs(const test::GridProblem& p, int levels, const std::string
         const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, test::exact_options(levels, r));
         const Diagnostics d = diagnose(h, p.f);
         const std::string file = dir + "/" + refinement_name(r) + ".csv";
-        write_csv(d, file);
+        io::write_csv(levels_table(d), file);
         csvs += " " + file;
         for (std::size_t i = 0; i < d.levels.size(); ++i) {
             const LevelDiagnostics& L = d.levels[i];

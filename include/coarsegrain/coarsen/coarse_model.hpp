@@ -11,6 +11,7 @@
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/common/types.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
+#include "coarsegrain/io/table.hpp"
 #include "coarsegrain/io/vtu.hpp"
 #include "coarsegrain/scene/scene.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
@@ -24,22 +25,6 @@ struct VtuOutput {
     io::VtuFields fields;
 };
 
-/// A plain file a method adds to the output folder (e.g. a CSV table).
-struct FileOutput {
-    std::string file;  ///< name inside the output folder
-    std::string content;
-};
-
-/// A plot made by a Python script of the source tree's scripts/ folder, run in the output
-/// folder as `python3 scripts/<script> <args...>` after every other file is written. It needs
-/// Python 3 with matplotlib; without them the runtime notes on stderr how to make the plot and
-/// the run still succeeds.
-struct PlotOutput {
-    std::string script;              ///< file name inside scripts/, e.g. "plot_mra.py"
-    std::vector<std::string> args;   ///< arguments; file names are relative to the output folder
-    std::vector<std::string> files;  ///< the images the script writes (output folder names)
-};
-
 /// A fine displacement a method reconstructs besides its coarse solution (mra: the single-level
 /// solve of every level, Chen 2019 Sec. 4.1). The runtime treats it as the coarse solution:
 /// it writes solution_<name>.vtu (fields of solution_coarse.vtu) and compares it with the fine
@@ -47,9 +32,9 @@ struct PlotOutput {
 struct Reconstruction {
     std::string name;
     Vector u;  ///< over all fine DOFs
-    /// JSON pointer into summary "coarse" (e.g. "/levels/0") of the object that receives this
+    /// The entry of the report's "levels" array (FineComparison::report) that receives this
     /// reconstruction's "errors", "probes" and "vtu" (the file name).
-    std::string report_pointer;
+    std::size_t level = 0;
 };
 
 /// The linear map that carries a coarse displacement to the fine DOFs: a sparse matrix (the
@@ -89,12 +74,12 @@ class FineMap {
 
 /// What a method adds once the fine solution is known.
 struct FineComparison {
-    /// Merged into summary "coarse" as an RFC 7386 merge patch (its keys replace the model's).
+    /// Figures for summary "coarse": each key replaces the model's own (CoarseModel::report).
     nlohmann::json report = nlohmann::json::object();
     std::vector<Reconstruction> reconstructions;
     std::vector<VtuOutput> outputs;
-    std::vector<FileOutput> files;
-    std::vector<PlotOutput> plots;
+    /// Tables of figures, written as <name>.csv; the app knows which it plots.
+    std::vector<io::Table> tables;
 };
 
 /// Figures and files of a method that need the fine solution `u` (over all fine DOFs).

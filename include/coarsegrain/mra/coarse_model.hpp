@@ -31,13 +31,12 @@ inline constexpr Index kCellTensorsMaxCells = 1024;
 /// Figures of every level of `h` against the fine solution `u` (over all fine DOFs, the run's
 /// own fine solve), for the summary of `coarsen --method mra`: mra::diagnose for the load
 /// fine.f with DiagnoseOptions {options.max_spectrum_dofs, keep_solutions, &u} (without u for
-/// the penalty treatments, whose fine problem is their own). The report's "levels" has q entries, level k at
-/// index k-1: `build_levels[k-1]` (the coarse_model report of level k; for level q its cells, nodes
-/// and the nonzeros of A^q) updated with to_json of the level's diagnostics; "spectrum_max_dofs"
-/// states the limit. Each level's single-level solve u^k = Φ^{k,T} (A^k)^{-1} g^k (Sec. 4.1)
-/// is a reconstruction "level_<k>" reported at "/levels/<k-1>"; the CSV is mra_levels.csv
-/// (write_csv) and scripts/plot_mra.py plots it to mra_errors.png (Fig. 9) and
-/// mra_condition.png (Fig. 8).
+/// the penalty treatments, whose fine problem is their own). The report's "levels" has q
+/// entries, level k at index k-1: `build_levels[k-1]` (the coarse_model report of level k; for
+/// level q its cells, nodes and the nonzeros of A^q) updated with to_json of the level's
+/// diagnostics; "spectrum_max_dofs" states the limit. Each level's single-level solve
+/// u^k = Φ^{k,T} (A^k)^{-1} g^k (Sec. 4.1) is a reconstruction "level_<k>" of level k-1 of
+/// "levels"; the table is levels_table (Figs. 8, 9: error and condition number per level).
 ///
 /// Sec. 5.6: coarsest_cells.vtu on the coarsest grid holds, per cell, the effective tensor
 /// "C_eff" (Voigt), the directional Young's modulus "E_x", "E_y" ("E_z"), "E_min", "E_max" and
@@ -45,8 +44,12 @@ inline constexpr Index kCellTensorsMaxCells = 1024;
 /// the cell averages of the stress recovered on the fine mesh from the coarsest solve,
 /// "stress_coarse" = mean σ(u^1), and from the fine solve, "stress_fine" (physical components,
 /// as solution VTUs; Fig. 16). The report's "coarsest_cells" has the file, the cells, E_min and
-/// E_max over all cells and directions, and per cell "E_axes", "E_min", "E_max". Skipped (with
-/// "skipped" saying why) above kCellTensorsMaxCells cells or if !options.cell_tensors.
+/// E_max over all cells and directions, and per cell "E_axes", "E_min", "E_max"; the table
+/// "coarsest_youngs" has a row per cell and direction (cell, direction, E). In 2D the table
+/// "coarsest_stress" has a row per fine element: centroid x, y, area, E and the stress (xx,
+/// yy, xy, von Mises) of the fine solve and of the coarsest level's (Fig. 16). The cell tensors
+/// (their file, report and table) are skipped ("skipped" says why) above kCellTensorsMaxCells
+/// cells or if !options.cell_tensors.
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
                                        const Vector& u, const nlohmann::json& build_levels,
                                        const CompareOptions& options);

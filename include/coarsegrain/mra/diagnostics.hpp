@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "coarsegrain/io/table.hpp"
 #include "coarsegrain/mra/hierarchy.hpp"
 
 namespace coarsegrain::mra {
@@ -80,12 +81,9 @@ double sparsity(const RunMatrix& M);
 /// @throws Error if g_fine has the wrong size or is zero on the hierarchy's fine DOFs
 Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOptions& options = {});
 
-/// One row per level with a header row (column names as the LevelDiagnostics fields in their
-/// order, spectrum_skipped last as 0/1; NaN as "nan").
-std::string to_csv(const Diagnostics& d);
-
-/// to_csv(d), written atomically.
-void write_csv(const Diagnostics& d, const std::string& file);
+/// The table "mra_levels": one row per level, columns as the LevelDiagnostics fields in their
+/// order (spectrum_skipped last, as 0 / 1; NaN where a level has no such figure).
+io::Table levels_table(const Diagnostics& d);
 
 /// The fields of one level as a JSON object (keys as the CSV columns plus spectrum_note; NaN
 /// becomes null).
