@@ -124,7 +124,9 @@ def methods(data, out):
     left.set_xscale("log")
     left.set_yticks(y, names)
     left.invert_yaxis()
-    left.set_xlabel("relative error against the fine solution")
+    floored = any(m["errors"]["energy_rel"] < floor or m["errors"]["l2_rel"] < floor for m in rows)
+    left.set_xlabel("relative error against the fine solution"
+                    + (f" (errors below {floor:g} drawn at {floor:g})" if floored else ""))
     left.legend(loc="lower right", fontsize=8)
     right.barh(y, speedup, color="tab:green")
     right.set_xscale("log")
