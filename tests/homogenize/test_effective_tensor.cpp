@@ -419,7 +419,8 @@ TEST(EffectiveTensor, BadInputIsNamed) {
     j["dirichlet"] = json::array({box({0.25 - 1e-9, -1, -1}, {0.25 + 1e-9, 2, 2})});
     const test::Setup sd = test::setup(j);
     test::expect_error([&] { homogenize::build_coarse_model(sd.scene, sd.fine, "voigt"); },
-                       "dirichlet[0].box selects no node of the coarse mesh");
+                       "dirichlet[0].box selects no node of the coarse mesh (the scene's boxes "
+                       "are applied again to it: widen the box to hold some of its nodes)");
 }
 
 }  // namespace
