@@ -48,12 +48,10 @@ Rerun
 Needs ccx and numpy like make_reference.py.
 """
 
-import argparse
 import json
 import os
 import shutil
 import sys
-import tempfile
 
 import numpy as np
 
@@ -149,18 +147,7 @@ def record(name, description, element, p, u, version, stdout, extra):
 
 
 def main():
-    here = os.path.dirname(os.path.abspath(__file__))
-    default_out = os.path.normpath(os.path.join(here, "..", "..", "tests", "data", "calculix"))
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--out", default=default_out, help="folder of the json files")
-    parser.add_argument("--keep", help="keep the ccx input and output files in this folder")
-    args = parser.parse_args()
-    if shutil.which("ccx") is None:
-        sys.exit("error: ccx not found; install the Debian package calculix-ccx")
-    os.makedirs(args.out, exist_ok=True)
-    version = ref.ccx_version()
-    workdir = args.keep or tempfile.mkdtemp(prefix="ccx_inc_")
-    os.makedirs(workdir, exist_ok=True)
+    args, version, workdir = ref.prepare(__doc__.split("\n")[0], "ccx_inc_")
     outputs = []
 
     for name, distort in (("hex_incompatible", False), ("hex_distorted", True)):

@@ -240,10 +240,13 @@ def make_problem(element):
                 fixed_box=(fixed_lo, fixed_hi), faces=faces, load_box=(load_lo, load_hi))
 
 
-def main():
+def prepare(description, prefix):
+    """The command line of a reference script (--out, --keep), checked for ccx: returns the
+    arguments, ccx's version and the working folder of the ccx runs (args.keep or a new
+    temporary one, which the caller removes unless args.keep)."""
     here = os.path.dirname(os.path.abspath(__file__))
     default_out = os.path.normpath(os.path.join(here, "..", "..", "tests", "data", "calculix"))
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--out", default=default_out, help="folder of the json files")
     parser.add_argument("--keep", help="keep the ccx input and output files in this folder")
     args = parser.parse_args()
@@ -251,8 +254,13 @@ def main():
         sys.exit("error: ccx not found; install the Debian package calculix-ccx")
     os.makedirs(args.out, exist_ok=True)
     version = ccx_version()
-    workdir = args.keep or tempfile.mkdtemp(prefix="ccx_ref_")
+    workdir = args.keep or tempfile.mkdtemp(prefix=prefix)
     os.makedirs(workdir, exist_ok=True)
+    return args, version, workdir
+
+
+def main():
+    args, version, workdir = prepare(__doc__.split("\n")[0], "ccx_ref_")
     for element in ("hex", "tet"):
         p = make_problem(element)
         write_inp(os.path.join(workdir, element + ".inp"), element, p["nodes"], p["elements"],

@@ -54,15 +54,19 @@ Eigen::VectorXd vec(const json& a) {
 }
 
 /// Mesh stored in the reference: nodes, 0-based connectivity (VTK order), material ids.
+/// Elements "hex", "tet" or "quad" (the plane-strain layer's quads, 2D nodes).
 mesh::Mesh reference_mesh(const json& ref) {
     mesh::Mesh m;
-    m.type = ref["element"] == "hex" ? mesh::ElementType::Hex8 : mesh::ElementType::Tet4;
+    m.type = ref["element"] == "hex"    ? mesh::ElementType::Hex8
+             : ref["element"] == "quad" ? mesh::ElementType::Quad4
+                                        : mesh::ElementType::Tet4;
+    const int dim = mesh::element_dim(m.type);
     const auto& nodes = ref["nodes"];
     const auto& elements = ref["elements"];
     const auto& ids = ref["material_ids"];
-    m.rest_positions.resize(static_cast<Index>(nodes.size()), 3);
+    m.rest_positions.resize(static_cast<Index>(nodes.size()), dim);
     for (std::size_t v = 0; v < nodes.size(); ++v)
-        for (int d = 0; d < 3; ++d)
+        for (int d = 0; d < dim; ++d)
             m.rest_positions(static_cast<Index>(v), d) = nodes[v][static_cast<std::size_t>(d)];
     const int npe = mesh::nodes_per_element(m.type);
     m.elements.resize(static_cast<Index>(elements.size()), npe);
@@ -175,29 +179,6 @@ INSTANTIATE_TEST_SUITE_P(Problems, CalculixReference, ::testing::Values("hex", "
 
 namespace {
 
-/// Reference mesh of dimension 2 (quad) or 3 (hex) from the stored nodes and elements.
-mesh::Mesh incompatible_reference_mesh(const json& ref) {
-    mesh::Mesh m;
-    m.type = ref["element"] == "quad" ? mesh::ElementType::Quad4 : mesh::ElementType::Hex8;
-    const int dim = mesh::element_dim(m.type);
-    const auto& nodes = ref["nodes"];
-    const auto& elements = ref["elements"];
-    m.rest_positions.resize(static_cast<Index>(nodes.size()), dim);
-    for (std::size_t v = 0; v < nodes.size(); ++v)
-        for (int d = 0; d < dim; ++d)
-            m.rest_positions(static_cast<Index>(v), d) = nodes[v][static_cast<std::size_t>(d)];
-    const int npe = mesh::nodes_per_element(m.type);
-    m.elements.resize(static_cast<Index>(elements.size()), npe);
-    m.material_ids.resize(static_cast<Index>(elements.size()));
-    for (std::size_t e = 0; e < elements.size(); ++e) {
-        for (int a = 0; a < npe; ++a)
-            m.elements(static_cast<Index>(e), a) = elements[e][static_cast<std::size_t>(a)];
-        m.material_ids[static_cast<Index>(e)] = ref["material_ids"][e];
-    }
-    mesh::validate(m, "calculix/" + ref["name"].get<std::string>() + ".json");
-    return m;
-}
-
 material::ElementMaterials incompatible_reference_materials(const json& ref,
                                                             const mesh::Mesh& m) {
     std::map<int, material::Material> by_id;
@@ -283,7 +264,7 @@ class CalculixIncompatible : public ::testing::TestWithParam<std::string> {};
 // our own grid (the congruent-grid assembly path) after checking it is the stored mesh.
 TEST_P(CalculixIncompatible, GridDisplacementsAgree) {
     const json ref = read_reference(GetParam());
-    const mesh::Mesh stored = incompatible_reference_mesh(ref);
+    const mesh::Mesh stored = reference_mesh(ref);
     mesh::Mesh m = mesh::make_grid(stored.type, vec(ref["grid"]["min"]), vec(ref["grid"]["max"]),
                                    vec(ref["grid"]["cells"]).cast<int>());
     ASSERT_EQ(m.rest_positions, stored.rest_positions);  // exact binary fractions
@@ -315,7 +296,7 @@ INSTANTIATE_TEST_SUITE_P(Problems, CalculixIncompatible,
 // the modes carry much of the deformation), so this problem tells the two variants apart.
 TEST(CalculixIncompatibleDistorted, CalculixModeMappingAgreesAndTaylorDiffers) {
     const json ref = read_reference("hex_distorted");
-    const mesh::Mesh m = incompatible_reference_mesh(ref);
+    const mesh::Mesh m = reference_mesh(ref);
     const material::ElementMaterials mats = incompatible_reference_materials(ref, m);
     const Vector u_ccx = ccx_displacements(ref, 3);
     Index off = 0;
