@@ -213,9 +213,12 @@ SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMat
         constexpr int n = mandel_size(S::dim);
         const auto element_matrix = [formulation](const kernels::Coords<S>& X,
                                                   const kernels::Tensor<S>& C) {
-            if constexpr (!S::simplex)
+            if constexpr (!S::simplex) {
                 if (formulation == Formulation::Incompatible)
                     return kernels::incompatible_stiffness<S>(X, C);
+            } else {
+                static_cast<void>(formulation);  // simplices have one formulation
+            }
             return kernels::stiffness<S>(X, C);
         };
         SparseMatrix K;
