@@ -294,17 +294,17 @@ int run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
     }
     // Several methods: those that cannot run on this scene are reported in the comparison;
     // if none can, nothing is worth solving.
-    std::vector<std::string> runnable;
+    bool any_runnable = false;
     std::string first_error;
     for (const std::string& method : methods) {
         try {
             coarsen::validate_method(sc, method);
-            runnable.push_back(method);
+            any_runnable = true;
         } catch (const Error& e) {
             if (first_error.empty()) first_error = e.what();
         }
     }
-    CG_VERIFY(!runnable.empty(), "no method can run on this scene: {}", first_error);
+    CG_VERIFY(any_runnable, "no method can run on this scene: {}", first_error);
     const OutputFolder folder(out_dir);
     return run_comparison(sc, methods, out_dir, command, read_seconds);
 }
