@@ -3,12 +3,26 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <Eigen/QR>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <random>
 
 namespace coarsegrain::test {
+
+double fitted_slope(const std::vector<double>& x, const std::vector<double>& y) {
+    const Index n = static_cast<Index>(x.size());
+    Eigen::MatrixXd A(n, 2);
+    Eigen::VectorXd b(n);
+    for (Index i = 0; i < n; ++i) {
+        A(i, 0) = std::log(x[static_cast<std::size_t>(i)]);
+        A(i, 1) = 1.0;
+        b[i] = std::log(y[static_cast<std::size_t>(i)]);
+    }
+    return A.colPivHouseholderQr().solve(b)[0];
+}
 
 Matrix rigid_modes(const Matrix& X) {
     const Index n = static_cast<Index>(X.rows());

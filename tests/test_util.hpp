@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "coarsegrain/common/error.hpp"
 
@@ -21,6 +22,10 @@ Vector linear_field(const Matrix& X, const Matrix& A, const Eigen::VectorXd& b);
 /// Moves every interior node of a grid mesh by a random offset of up to `amount` times the grid
 /// spacing (fixed seed), keeping elements valid. Boundary nodes stay put.
 void distort_interior(mesh::Mesh& mesh, double amount, unsigned seed = 1);
+
+/// Least-squares slope of log(y) against log(x) (x, y > 0, same length >= 2): the rate of a
+/// convergence study.
+double fitted_slope(const std::vector<double>& x, const std::vector<double>& y);
 
 /// A fresh empty temporary folder for one test, private to this process.
 std::string temp_dir(const std::string& name);

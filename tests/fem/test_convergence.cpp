@@ -121,15 +121,12 @@ Errors solve_manufactured(ElementType type, int n) {
 
 /// Least-squares slope of log(error) against log(h).
 double fitted_slope(const std::vector<Errors>& runs, double Errors::*field) {
-    const int n = static_cast<int>(runs.size());
-    Eigen::MatrixXd A(n, 2);
-    Eigen::VectorXd y(n);
-    for (int i = 0; i < n; ++i) {
-        A(i, 0) = std::log(runs[i].h);
-        A(i, 1) = 1.0;
-        y[i] = std::log(runs[i].*field);
+    std::vector<double> h, e;
+    for (const Errors& r : runs) {
+        h.push_back(r.h);
+        e.push_back(r.*field);
     }
-    return A.colPivHouseholderQr().solve(y)[0];
+    return test::fitted_slope(h, e);
 }
 
 struct ConvergenceCase {
