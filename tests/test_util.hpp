@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "coarsegrain/common/error.hpp"
-
 #include "coarsegrain/common/types.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 

@@ -61,10 +61,9 @@ void validate(const DynamicsOptions& o) {
               o.output_every);
     CG_VERIFY(std::isfinite(o.rayleigh_mass) && o.rayleigh_mass >= 0 &&
                   std::isfinite(o.rayleigh_stiffness) && o.rayleigh_stiffness >= 0,
-              "dynamics.damping.rayleigh: expected two numbers >= 0, got [{}, {}]",
-              o.rayleigh_mass, o.rayleigh_stiffness);
-    CG_VERIFY(o.initial_velocity.allFinite(),
-              "dynamics.initial_velocity: expected finite numbers");
+              "dynamics.damping.rayleigh: expected two numbers >= 0, got [{}, {}]", o.rayleigh_mass,
+              o.rayleigh_stiffness);
+    CG_VERIFY(o.initial_velocity.allFinite(), "dynamics.initial_velocity: expected finite numbers");
 }
 
 TimeStepper::TimeStepper(const SparseMatrix& K, const SparseMatrix& M, const fem::Dirichlet& bc,
@@ -72,12 +71,12 @@ TimeStepper::TimeStepper(const SparseMatrix& K, const SparseMatrix& M, const fem
     : m_K(K), m_M(M), m_options(options), m_solver(solver) {
     validate(options);
     CG_VERIFY(K.rows() == K.cols() && M.rows() == M.cols() && K.rows() == M.rows(),
-              "time stepping: stiffness {}x{} and mass {}x{} must be square of one size",
-              K.rows(), K.cols(), M.rows(), M.cols());
+              "time stepping: stiffness {}x{} and mass {}x{} must be square of one size", K.rows(),
+              K.cols(), M.rows(), M.cols());
     const auto [cC, cK] = step_weights(options);
     // S = M + c_C (α M + β K) + c_K K
-    const SparseMatrix S = (1 + cC * options.rayleigh_mass) * M +
-                           (cK + cC * options.rayleigh_stiffness) * K;
+    const SparseMatrix S =
+        (1 + cC * options.rayleigh_mass) * M + (cK + cC * options.rayleigh_stiffness) * K;
     const fem::ReducedSystem sys = fem::reduce(S, Vector::Zero(S.rows()), bc);
     m_free = sys.free_dofs;
     m_solver.compute(sys.K);

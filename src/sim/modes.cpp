@@ -64,8 +64,8 @@ std::pair<Vector, Matrix> lowest_pairs(const SparseMatrix& K, const SparseMatrix
     eigs.init();
     eigs.compute(Spectra::SortRule::LargestMagn, 1000, 1e-10, Spectra::SortRule::SmallestAlge);
     CG_VERIFY(eigs.info() == Spectra::CompInfo::Successful,
-              "modes: shift-invert Lanczos for {} eigenpairs of {} free DOFs did not converge",
-              k, n);
+              "modes: shift-invert Lanczos for {} eigenpairs of {} free DOFs did not converge", k,
+              n);
     return {eigs.eigenvalues(), eigs.eigenvectors()};
 }
 

@@ -26,6 +26,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "../../src/fem/element_kernels.hpp"
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/fem/loads.hpp"
@@ -33,54 +34,12 @@
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
-#include "../../src/fem/element_kernels.hpp"
+#include "fem/calculix_reference.hpp"
 
 using namespace coarsegrain;
 using nlohmann::json;
 
-namespace {
-
-json read_reference(const std::string& name) {
-    const std::string path = std::string(COARSEGRAIN_TEST_DATA) + "/calculix/" + name + ".json";
-    std::ifstream in(path);
-    EXPECT_TRUE(in.good()) << "cannot open " << path;
-    return json::parse(in);
-}
-
-Eigen::VectorXd vec(const json& a) {
-    Eigen::VectorXd v(static_cast<Index>(a.size()));
-    for (Index i = 0; i < v.size(); ++i) v[i] = a[static_cast<std::size_t>(i)].get<double>();
-    return v;
-}
-
-/// Mesh stored in the reference: nodes, 0-based connectivity (VTK order), material ids.
-/// Elements "hex", "tet" or "quad" (the plane-strain layer's quads, 2D nodes).
-mesh::Mesh reference_mesh(const json& ref) {
-    mesh::Mesh m;
-    m.type = ref["element"] == "hex"    ? mesh::ElementType::Hex8
-             : ref["element"] == "quad" ? mesh::ElementType::Quad4
-                                        : mesh::ElementType::Tet4;
-    const int dim = mesh::element_dim(m.type);
-    const auto& nodes = ref["nodes"];
-    const auto& elements = ref["elements"];
-    const auto& ids = ref["material_ids"];
-    m.rest_positions.resize(static_cast<Index>(nodes.size()), dim);
-    for (std::size_t v = 0; v < nodes.size(); ++v)
-        for (int d = 0; d < dim; ++d)
-            m.rest_positions(static_cast<Index>(v), d) = nodes[v][static_cast<std::size_t>(d)];
-    const int npe = mesh::nodes_per_element(m.type);
-    m.elements.resize(static_cast<Index>(elements.size()), npe);
-    m.material_ids.resize(static_cast<Index>(elements.size()));
-    for (std::size_t e = 0; e < elements.size(); ++e) {
-        for (int a = 0; a < npe; ++a)
-            m.elements(static_cast<Index>(e), a) = elements[e][static_cast<std::size_t>(a)];
-        m.material_ids[static_cast<Index>(e)] = ids[e];
-    }
-    mesh::validate(m, "calculix/" + ref["name"].get<std::string>() + ".json");
-    return m;
-}
-
-}  // namespace
+using namespace coarsegrain::test;
 
 class CalculixReference : public ::testing::TestWithParam<std::string> {};
 
@@ -103,63 +62,15 @@ TEST_P(CalculixReference, DisplacementsAgree) {
     const json ref = read_reference(GetParam());
     const mesh::Mesh m = reference_mesh(ref);
 
-    std::map<int, material::Material> by_id;
-    for (const auto& [id, mat] : ref["materials"].items())
-        by_id[std::stoi(id)] = material::isotropic(3, mat["E"], mat["nu"], mat["density"]);
-    const material::ElementMaterials mats = material::assign(m, by_id);
+    const material::ElementMaterials mats = reference_materials(ref, m);
+    const Vector u = solve_reference(ref, m, mats, fem::stiffness_matrix(m, mats));
 
-    // Pressure p on the faces in the load box: traction -p n, n the outward normal (+x here).
-    const mesh::Boundary b = mesh::boundary(m);
-    const auto& pressure = ref["pressure"];
-    const std::vector<Index> facets =
-        mesh::facets_in_box(m, b, vec(pressure["box"]["min"]), vec(pressure["box"]["max"]));
-    ASSERT_EQ(facets.size(), pressure["faces"].size());  // the faces ccx loaded, one for one
-    const Eigen::Vector3d normal = b.normals.row(facets.front()).transpose();
-    for (const Index f : facets)
-        ASSERT_LT((b.normals.row(f).transpose() - normal).norm(), 1e-12);  // a flat face
-    const double p = pressure["value"];
-    const Vector f = fem::gravity_load(m, mats, vec(ref["gravity"])) +
-                     fem::traction_load(m, b, facets, -p * normal);
-
-    const auto& dirichlet = ref["dirichlet"];
-    const std::vector<Index> fixed =
-        mesh::nodes_in_box(m, vec(dirichlet["box"]["min"]), vec(dirichlet["box"]["max"]));
-    ASSERT_EQ(fixed, dirichlet["nodes"].get<std::vector<Index>>());
-    fem::Dirichlet bc;
-    bc.fix_nodes(fixed, vec(dirichlet["value"]));
-
-    const SparseMatrix K = fem::stiffness_matrix(m, mats);
-    const fem::ReducedSystem sys = fem::reduce(K, f, bc);
-    solve::SpdSolver solver;
-    solver.compute(sys.K);
-    const Vector u = fem::expand(sys, solver.solve(sys.rhs), bc, m.num_dofs());
-
-    Vector u_ccx(m.num_dofs());
-    const auto& disp = ref["displacements"];
-    ASSERT_EQ(static_cast<Index>(disp.size()), m.num_nodes());
-    for (Index v = 0; v < m.num_nodes(); ++v)
-        for (int d = 0; d < 3; ++d)
-            u_ccx[3 * v + d] = disp[static_cast<std::size_t>(v)][static_cast<std::size_t>(d)];
-    const double scale = u_ccx.lpNorm<Eigen::Infinity>();
-    ASSERT_GT(scale, 0.0);
-    const double rel = (u - u_ccx).lpNorm<Eigen::Infinity>() / scale;
+    const Vector u_ccx = ccx_displacements(ref, 3);
+    Index off = 0;
+    const double rel = ccx_difference(u, u_ccx, &off);
     RecordProperty("max_rel_difference", fmt::format("{:.3e}", rel));
-    EXPECT_LT(rel, 1e-6) << GetParam() << ": max|u - u_ccx| / max|u_ccx| = " << rel
-                         << " (max|u_ccx| = " << scale << ")";
-
-    // ccx prints d.dddddd E+xx: half a unit in the last digit is 5e-7 * 10^floor(log10|v|).
-    Index off_digits = 0, first_off = -1;
-    for (Index i = 0; i < u.size(); ++i) {
-        const double v = std::abs(u_ccx[i]);
-        const double half_ulp = v > 0 ? 5e-7 * std::pow(10.0, std::floor(std::log10(v))) : 0.0;
-        if (std::abs(u[i] - u_ccx[i]) > half_ulp * (1 + 1e-9) + 1e-12 * scale) {
-            if (first_off < 0) first_off = i;
-            ++off_digits;
-        }
-    }
-    EXPECT_EQ(off_digits, 0) << GetParam() << ": " << off_digits
-                             << " components differ from ccx's printed digits, first DOF "
-                             << first_off;
+    EXPECT_LT(rel, 1e-6) << GetParam() << ": max|u - u_ccx| / max|u_ccx| = " << rel;
+    EXPECT_EQ(off, 0) << GetParam() << ": components off ccx's printed digits";
 }
 
 INSTANTIATE_TEST_SUITE_P(Problems, CalculixReference, ::testing::Values("hex", "tet"),
@@ -178,61 +89,6 @@ INSTANTIATE_TEST_SUITE_P(Problems, CalculixReference, ::testing::Values("hex", "
 // with u_z = 0) 1.0e-7, hex_distorted with CalculiX's mode mapping 3.3e-7 (see below).
 
 namespace {
-
-material::ElementMaterials incompatible_reference_materials(const json& ref,
-                                                            const mesh::Mesh& m) {
-    std::map<int, material::Material> by_id;
-    for (const auto& [id, mat] : ref["materials"].items())
-        by_id[std::stoi(id)] = material::isotropic(m.dim(), mat["E"], mat["nu"], mat["density"]);
-    return material::assign(m, by_id);  // 2D: plane strain (the default)
-}
-
-/// Solves the reference problem (gravity, pressure, clamp) with stiffness K on mesh m.
-Vector solve_incompatible_reference(const json& ref, const mesh::Mesh& m,
-                                    const material::ElementMaterials& mats,
-                                    const SparseMatrix& K) {
-    const mesh::Boundary b = mesh::boundary(m);
-    const auto& pressure = ref["pressure"];
-    const std::vector<Index> facets =
-        mesh::facets_in_box(m, b, vec(pressure["box"]["min"]), vec(pressure["box"]["max"]));
-    EXPECT_EQ(facets.size(), pressure["faces"].size());  // the faces ccx loaded, one for one
-    const Eigen::VectorXd normal = b.normals.row(facets.front()).transpose();
-    const double p = pressure["value"];
-    const Vector f = fem::gravity_load(m, mats, vec(ref["gravity"])) +
-                     fem::traction_load(m, b, facets, -p * normal);
-    const auto& dirichlet = ref["dirichlet"];
-    const std::vector<Index> fixed =
-        mesh::nodes_in_box(m, vec(dirichlet["box"]["min"]), vec(dirichlet["box"]["max"]));
-    EXPECT_EQ(fixed, dirichlet["nodes"].get<std::vector<Index>>());
-    fem::Dirichlet bc;
-    bc.fix_nodes(fixed, vec(dirichlet["value"]));
-    const fem::ReducedSystem sys = fem::reduce(K, f, bc);
-    solve::SpdSolver solver;
-    solver.compute(sys.K);
-    return fem::expand(sys, solver.solve(sys.rhs), bc, m.num_dofs());
-}
-
-Vector ccx_displacements(const json& ref, int dim) {
-    const auto& disp = ref["displacements"];
-    Vector u(dim * static_cast<Index>(disp.size()));
-    for (std::size_t v = 0; v < disp.size(); ++v)
-        for (int d = 0; d < dim; ++d)
-            u[dim * static_cast<Index>(v) + d] = disp[v][static_cast<std::size_t>(d)];
-    return u;
-}
-
-/// max|u - u_ccx| / max|u_ccx|, and (in `off`) the components that differ from ccx's printed
-/// value by more than half a unit in its last digit (plus 1e-12 max|u_ccx| of round-off).
-double ccx_difference(const Vector& u, const Vector& u_ccx, Index* off) {
-    const double scale = u_ccx.lpNorm<Eigen::Infinity>();
-    *off = 0;
-    for (Index i = 0; i < u.size(); ++i) {
-        const double v = std::abs(u_ccx[i]);
-        const double half_ulp = v > 0 ? 5e-7 * std::pow(10.0, std::floor(std::log10(v))) : 0.0;
-        if (std::abs(u[i] - u_ccx[i]) > half_ulp * (1 + 1e-9) + 1e-12 * scale) ++*off;
-    }
-    return (u - u_ccx).lpNorm<Eigen::Infinity>() / scale;
-}
 
 /// The global stiffness of the incompatible element with CalculiX's mode mapping (no j0 / j
 /// factor), assembled here from the private kernel: not an option of the library.
@@ -270,9 +126,9 @@ TEST_P(CalculixIncompatible, GridDisplacementsAgree) {
     ASSERT_EQ(m.rest_positions, stored.rest_positions);  // exact binary fractions
     ASSERT_EQ(m.elements, stored.elements);
     m.material_ids = stored.material_ids;
-    const material::ElementMaterials mats = incompatible_reference_materials(ref, m);
+    const material::ElementMaterials mats = reference_materials(ref, m);
     const SparseMatrix K = fem::stiffness_matrix(m, mats, fem::Formulation::Incompatible);
-    const Vector u = solve_incompatible_reference(ref, m, mats, K);
+    const Vector u = solve_reference(ref, m, mats, K);
     const Vector u_ccx = ccx_displacements(ref, m.dim());
     Index off = 0;
     const double rel = ccx_difference(u, u_ccx, &off);
@@ -280,7 +136,7 @@ TEST_P(CalculixIncompatible, GridDisplacementsAgree) {
     EXPECT_LT(rel, 1e-6) << GetParam() << ": max|u - u_ccx| / max|u_ccx| = " << rel;
     EXPECT_EQ(off, 0) << GetParam() << ": components off ccx's printed digits";
     // The standard element is a different one: far from C3D8I (material 2 locks).
-    const Vector u_std = solve_incompatible_reference(ref, m, mats, fem::stiffness_matrix(m, mats));
+    const Vector u_std = solve_reference(ref, m, mats, fem::stiffness_matrix(m, mats));
     EXPECT_GT((u_std - u_ccx).lpNorm<Eigen::Infinity>(), 1e-2 * u_ccx.lpNorm<Eigen::Infinity>());
 }
 
@@ -297,16 +153,16 @@ INSTANTIATE_TEST_SUITE_P(Problems, CalculixIncompatible,
 TEST(CalculixIncompatibleDistorted, CalculixModeMappingAgreesAndTaylorDiffers) {
     const json ref = read_reference("hex_distorted");
     const mesh::Mesh m = reference_mesh(ref);
-    const material::ElementMaterials mats = incompatible_reference_materials(ref, m);
+    const material::ElementMaterials mats = reference_materials(ref, m);
     const Vector u_ccx = ccx_displacements(ref, 3);
     Index off = 0;
-    const Vector u = solve_incompatible_reference(ref, m, mats, calculix_c3d8i_stiffness(m, mats));
+    const Vector u = solve_reference(ref, m, mats, calculix_c3d8i_stiffness(m, mats));
     const double rel = ccx_difference(u, u_ccx, &off);
     RecordProperty("max_rel_difference", fmt::format("{:.3e}", rel));
     EXPECT_LT(rel, 1e-6) << "max|u - u_ccx| / max|u_ccx| = " << rel;
     EXPECT_EQ(off, 0);
 
-    const Vector u_taylor = solve_incompatible_reference(
+    const Vector u_taylor = solve_reference(
         ref, m, mats, fem::stiffness_matrix(m, mats, fem::Formulation::Incompatible));
     const double rel_taylor = ccx_difference(u_taylor, u_ccx, &off);
     RecordProperty("taylor_rel_difference", fmt::format("{:.3e}", rel_taylor));

@@ -1,5 +1,3 @@
-#include "coarsegrain/sim/dynamics.hpp"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -9,6 +7,7 @@
 #include "coarsegrain/fem/loads.hpp"
 #include "coarsegrain/material/material_field.hpp"
 #include "coarsegrain/mesh/grid.hpp"
+#include "coarsegrain/sim/dynamics.hpp"
 #include "test_util.hpp"
 
 using namespace coarsegrain;
@@ -131,8 +130,8 @@ TEST(Dynamics, ConvergenceOrderInTimeStep) {
     const Bar b = make_bar(mesh::ElementType::Quad4, fem::MassType::Consistent);
     const double T = 2.0;
     const Vector exact = exact_from_rest(b, T);
-    for (const auto& [integrator, order] :
-         {std::pair{sim::Integrator::Midpoint, 2.0}, std::pair{sim::Integrator::ImplicitEuler, 1.0}}) {
+    for (const auto& [integrator, order] : {std::pair{sim::Integrator::Midpoint, 2.0},
+                                            std::pair{sim::Integrator::ImplicitEuler, 1.0}}) {
         std::vector<double> dts, errors;
         for (int steps : {1600, 3200, 6400, 12800}) {
             const sim::DynamicsOptions o = options(integrator, T / steps, steps);
