@@ -13,6 +13,7 @@
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/progress.hpp"
 #include "run_coarsen.hpp"
+#include "run_dynamics.hpp"
 #include "run_solve.hpp"
 
 namespace cg = coarsegrain;
@@ -99,6 +100,42 @@ int main(int argc, char** argv) {
         "Several methods compare them: DIR/<method>/ holds each one's files, and DIR/report.md\n"
         "the table and pictures (as `coarsegrain demo`).\n"
         "See docs/guide.md, \"Coarsening\".");
+    std::string sim_scene, sim_out = "out/simulate", sim_methods, modes_scene,
+                           modes_out = "out/modes", modes_methods;
+    int modes_count = 10;
+    CLI::App* simulate = app.add_subcommand(
+        "simulate", "time stepping (scene \"dynamics\"), fine and coarse, compared");
+    simulate->add_option("scene", sim_scene, "scene file (JSON) with a \"dynamics\" block")
+        ->required();
+    simulate
+        ->add_option("--method", sim_methods,
+                     "coarse models to step beside the fine one: methods separated by commas, "
+                     "or all (default: the fine model alone)")
+        ->check(CLI::Validator(check_methods, "METHOD[,METHOD...]|all"));
+    simulate->add_option("--out", sim_out, "output folder")->capture_default_str();
+    simulate->footer(
+        "Scene: \"dynamics\": {\"integrator\": \"midpoint\"|\"implicit_euler\", \"dt\", "
+        "\"steps\",\n"
+        "\"output_every\", \"start\": \"rest\"|\"static\", \"initial_velocity\", \"damping\":\n"
+        "{\"rayleigh\": [alpha, beta]}, \"mass\": \"consistent\"|\"lumped\"}; coarse.mass\n"
+        "(lumped|consistent|galerkin) chooses the effective tensors' and baselines' coarse mass.\n"
+        "Files: fine.pvd (+ fine/), <method>.pvd (+ <method>/) for ParaView, trajectory.csv,\n"
+        "trajectory.png, summary.json. See docs/guide.md, \"Dynamics\".");
+    CLI::App* modes = app.add_subcommand(
+        "modes", "natural frequencies and modes, fine and coarse, paired by MAC");
+    modes->add_option("scene", modes_scene, "scene file (JSON)")->required();
+    modes
+        ->add_option("--method", modes_methods,
+                     "coarse models to compare: methods separated by commas, or all (default: "
+                     "the fine model alone)")
+        ->check(CLI::Validator(check_methods, "METHOD[,METHOD...]|all"));
+    modes->add_option("--count", modes_count, "number of lowest modes")
+        ->check(CLI::Range(1, 1000))
+        ->capture_default_str();
+    modes->add_option("--out", modes_out, "output folder")->capture_default_str();
+    modes->footer(
+        "Files: mode_NN.vtu (fine mode \"mode\" and each method's paired mode), frequencies.csv,\n"
+        "frequencies.png, summary.json. See docs/guide.md, \"Dynamics\".");
     CLI::App* demo = app.add_subcommand(
         "demo",
         "the built-in scene, a layered beam (stiff/soft, contrast 1000) hung under gravity: fine\n"
@@ -135,6 +172,22 @@ int main(int argc, char** argv) {
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             failed = cg::app::run_coarsen(sc, selected_methods(sc, method), coarsen_out, "coarsen",
                                           read);
+        } else if (*simulate) {
+            const cg::scene::Scene sc = cg::scene::load_scene(sim_scene);
+            const double read =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const std::vector<std::string> methods = sim_methods.empty()
+                                                         ? std::vector<std::string>{}
+                                                         : selected_methods(sc, sim_methods);
+            failed = cg::app::run_simulate(sc, methods, sim_out, read);
+        } else if (*modes) {
+            const cg::scene::Scene sc = cg::scene::load_scene(modes_scene);
+            const double read =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const std::vector<std::string> methods = modes_methods.empty()
+                                                         ? std::vector<std::string>{}
+                                                         : selected_methods(sc, modes_methods);
+            failed = cg::app::run_modes(sc, methods, modes_count, modes_out, read);
         } else if (*demo) {
             const cg::scene::Scene sc =
                 cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
@@ -154,8 +207,8 @@ int main(int argc, char** argv) {
         return kExitError;
     }
     if (failed > 0) {
-        std::fprintf(stderr, "error: %d method%s failed (see the table and summary.json)\n",
-                     failed, failed == 1 ? "" : "s");
+        std::fprintf(stderr, "error: %d method%s failed (see the table and summary.json)\n", failed,
+                     failed == 1 ? "" : "s");
         return kExitError;
     }
     return 0;

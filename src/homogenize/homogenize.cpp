@@ -300,6 +300,36 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
     return c;
 }
 
+namespace {
+
+/// The coarse mass of CoarseMass `type` for the coarse-to-fine map P (CoarseModel::mass).
+std::function<SparseMatrix(const SparseMatrix&)> coarse_mass(
+    CoarseMass type, SparseMatrix P, const mesh::Mesh& coarse,
+    const material::ElementMaterials& mats) {
+    switch (type) {
+        case CoarseMass::Lumped:
+            return [P = std::move(P)](const SparseMatrix& M) -> SparseMatrix {
+                const Vector m = P.transpose() * (M * Vector::Ones(M.cols()));
+                SparseMatrix D(m.size(), m.size());
+                D.setIdentity();
+                D.diagonal() = m;
+                return D;
+            };
+        case CoarseMass::Consistent:
+            return [Mc = fem::mass_matrix(coarse, mats, fem::MassType::Consistent)](
+                       const SparseMatrix&) { return Mc; };
+        case CoarseMass::Galerkin:
+            return [P = std::move(P)](const SparseMatrix& M) -> SparseMatrix {
+                SparseMatrix Mc = SparseMatrix(P.transpose()) * (M * P);
+                Mc.makeCompressed();
+                return Mc;
+            };
+    }
+    return {};
+}
+
+}  // namespace
+
 coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
                                   Coarsening c) {
     const int dim = c.coarse.dim();
@@ -328,11 +358,10 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
             mats.index[q] = q;
         }
         m.K = fem::stiffness_matrix(c.coarse, mats);
-        const SparseMatrix M = fem::mass_matrix(c.coarse, mats, fem::MassType::Lumped);
-        m.mass = M.diagonal();
         m.f = scene::load_vector(scene, c.coarse, mats, mesh::boundary(c.coarse), "coarse mesh");
         m.bc = scene::dirichlet_conditions(scene, c.coarse, "coarse mesh");
     }
+    SparseMatrix P;
     {
         const Phase phase("maps", &m.timings);
         const mesh::PointLocator locator(c.coarse);
@@ -345,11 +374,13 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
             const bool neumann = !c.fallback.empty();
             const HarmonicMap map(c.coarse, neumann ? c.H_neumann : c.H, fine.mesh.rest_positions,
                                   neumann ? c.h_neumann : c.h, carrier);
-            m.to_fine = map.linearized();
+            P = map.linearized();
         } else {
-            m.to_fine = barycentric_embedding(c.coarse, loc);
+            P = barycentric_embedding(c.coarse, loc);
         }
+        m.to_fine = P;
     }
+    m.mass = coarse_mass(c.options.mass, std::move(P), c.coarse, mats);
 
     coarsen::VtuOutput model{"coarse_model.vtu", c.coarse, {}};
     io::add_element_material_fields(model.fields, mats);

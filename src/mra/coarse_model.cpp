@@ -179,6 +179,11 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
                                  [hierarchy, Pt = SparseMatrix(P.transpose())](const Vector& u) {
                                      return reconstruct(*hierarchy, Pt * u, 1);
                                  });
+    m.mass = [hierarchy, P](const SparseMatrix& M) -> SparseMatrix {
+        SparseMatrix Mc = P * galerkin_operator(*hierarchy, M, 1) * SparseMatrix(P.transpose());
+        Mc.makeCompressed();
+        return Mc;
+    };
     // Held at zero: the DOFs without a basis function, and the boundary-blind level's fixed ones.
     std::vector<Index> held(L1.dropped_dofs.data(),
                             L1.dropped_dofs.data() + L1.dropped_dofs.size());

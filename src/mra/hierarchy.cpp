@@ -162,9 +162,10 @@ Index symmetric_nonzeros(const SparseMatrix& lower) {
 void validate(const Options& options) {
     CG_VERIFY(options.levels >= 2 && options.levels <= kMaxLevels,
               "mra: levels = {} must be in 2..{}", options.levels, kMaxLevels);
-    CG_VERIFY(options.radius.size() == 1 || static_cast<int>(options.radius.size()) == options.levels - 1,
-              "mra: radius has {} entries, expected 1 or levels - 1 = {}", options.radius.size(),
-              options.levels - 1);
+    CG_VERIFY(
+        options.radius.size() == 1 || static_cast<int>(options.radius.size()) == options.levels - 1,
+        "mra: radius has {} entries, expected 1 or levels - 1 = {}", options.radius.size(),
+        options.levels - 1);
     for (const double r : options.radius)
         CG_VERIFY(r >= 1, "mra: radius {} must be at least 1 (or infinity)", r);
     CG_VERIFY(options.patch >= 1, "mra: patch = {} must be at least 1", options.patch);
@@ -520,6 +521,24 @@ Vector reconstruct(const Hierarchy& h, const Vector& u_k, int k) {
     Vector out = Vector::Zero(h.fine_grid_dofs());
     for (Index i = 0; i < h.fine_dofs.size(); ++i) out[h.fine_dofs[i]] = u[i];
     return out;
+}
+
+SparseMatrix galerkin_operator(const Hierarchy& h, const SparseMatrix& X, int k) {
+    const Index n = h.fine_grid_dofs();
+    CG_VERIFY(X.rows() == n && X.cols() == n, "mra: a {}x{} operator on {} fine grid DOFs",
+              X.rows(), X.cols(), n);
+    CG_VERIFY(k >= 1 && k <= h.num_levels(), "mra: level {} out of range 1..{}", k, h.num_levels());
+    SparseMatrix S(h.fine_dofs.size(), n);  // selects the hierarchy's fine DOFs
+    std::vector<Eigen::Triplet<double, Index>> t;
+    for (Index i = 0; i < h.fine_dofs.size(); ++i) t.emplace_back(i, h.fine_dofs[i], 1.0);
+    S.setFromTriplets(t.begin(), t.end());
+    SparseMatrix Y = S * X * SparseMatrix(S.transpose());
+    for (int l = h.num_levels() - 1; l >= k; --l) {
+        const SparseMatrix C = h.level(l).C_adapted.sparse();
+        Y = C * Y * SparseMatrix(C.transpose());
+    }
+    Y.makeCompressed();
+    return Y;
 }
 
 Vector coarse_grain(const Hierarchy& h, const Vector& g_fine, int k) {

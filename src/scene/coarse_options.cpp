@@ -40,6 +40,9 @@ homogenize::Options parse_homogenize(const JsonReader& r) {
     if (auto v = r.find("normals")) o.coarse_normals = parse_choice(*v, {"coarse", "fine"}) == 0;
     if (auto v = r.find("boundary")) o.mixed_boundary = parse_choice(*v, {"neumann", "mixed"}) == 1;
     if (auto v = r.find("map")) o.harmonic_map = parse_choice(*v, {"barycentric", "harmonic"}) == 1;
+    if (auto v = r.find("mass"))
+        o.mass = static_cast<homogenize::CoarseMass>(
+            parse_choice(*v, {"lumped", "consistent", "galerkin"}));
     return o;
 }
 
@@ -111,7 +114,7 @@ CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::stri
     if (coarse.is_null()) return o;
     const JsonReader r(coarse, "coarse", source);
     // One list for every method, so that one scene can be coarsened by each of them.
-    r.allow_only({"mesh", "normals", "boundary", "map", "levels", "refinement", "radius",
+    r.allow_only({"mesh", "normals", "boundary", "map", "mass", "levels", "refinement", "radius",
                   "radius_grid", "patch", "patch_clip", "truncation", "invariance", "dirichlet",
                   "spectrum_max_dofs", "cell_tensors", "localization", "measurement",
                   "defect_tolerance", "max_radius", "boundary_blind"});

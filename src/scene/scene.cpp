@@ -281,7 +281,7 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     const JsonReader root(j, "", s.source);
     root.require_object();
     root.allow_only({"description", "dimension", "mesh", "materials", "material_field", "plane",
-                     "dirichlet", "loads", "probes", "fem", "solver", "coarse"});
+                     "dirichlet", "loads", "probes", "fem", "solver", "coarse", "dynamics"});
     // Everything that needs no mesh first, so that a bad option fails before a mesh is read.
     std::optional<int> dimension;
     if (auto d = root.find("dimension")) dimension = static_cast<int>(d->integer(2, 3));
@@ -314,6 +314,7 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
         }
     }
     if (auto c = root.find("coarse")) s.coarse = parse_coarse_options(c->json(), s.source);
+    if (auto d = root.find("dynamics")) s.dynamics = parse_dynamics_options(d->json(), s.source);
 
     std::map<int, material::Material> carried;
     s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir, &carried);
@@ -367,6 +368,14 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
         if (auto g = l->find("gravity")) s.gravity = g->vector(dim);
         if (auto t = l->find("traction")) s.traction = parse_box_conditions(*t, dim, true);
     }
+    if (s.dynamics && s.dynamics->initial_velocity.size() == 0)
+        s.dynamics->initial_velocity = Eigen::VectorXd::Zero(dim);
+    else if (s.dynamics)
+        root.at("dynamics")
+            .at("initial_velocity")
+            .fail_unless(s.dynamics->initial_velocity.size() == dim,
+                         "expected {} numbers for a {}D scene, got {}", dim, dim,
+                         s.dynamics->initial_velocity.size());
     if (auto p = root.find("probes"))
         for (std::size_t i = 0; i < p->array_size(); ++i) s.probes.push_back(p->at(i).vector(dim));
     if (auto c = root.find("coarse"); c && c->has("mesh")) {

@@ -9,6 +9,7 @@
 #include "coarsegrain/io/vtu.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/grid.hpp"
+#include "coarsegrain/sim/dynamics.hpp"
 #include "fem/fem_test_util.hpp"
 #include "homogenize/homogenize_test_util.hpp"
 #include "mesh/drop_elements.hpp"
@@ -16,6 +17,9 @@
 
 namespace coarsegrain {
 namespace {
+
+/// Total mass of a consistent or lumped mass matrix M (its entries' sum over one component).
+double total_mass(const SparseMatrix& M, int dim) { return M.sum() / dim; }
 
 using nlohmann::json;
 using test::box;
@@ -168,7 +172,8 @@ TEST(EffectiveTensor, SpringsInSeriesGiveTheSeriesStiffness) {
         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 1.0}, {"ids", {1, 2}}}}}},
         {"materials", {{"1", iso(E1, 0.0)}, {"2", iso(E2, 0.0)}}},
         {"dirichlet", json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
-        {"loads", {{"traction", json::array({box({2 - 1e-9, -1, -1}, {2 + 1e-9, 2, 2}, {1, 0, 0})})}}},
+        {"loads",
+         {{"traction", json::array({box({2 - 1e-9, -1, -1}, {2 + 1e-9, 2, 2}, {1, 0, 0})})}}},
         {"coarse", {{"mesh", grid({0, 0, 0}, {2, 1, 1}, {1, 3, 3}, "tet")}}}};
     const test::Setup s = test::setup(j);
     const double k_series = 1.0 / (1.0 / E1 + 1.0 / E2);  // k_i = E_i A / L_i with A = L_i = 1
@@ -196,17 +201,42 @@ TEST(EffectiveTensor, SpringsInSeriesGiveTheSeriesStiffness) {
     EXPECT_GT(k_naive / k_series, 10.0);
 }
 
-// Mass: the coarse lumped masses sum to the fine mass when the coarse mesh covers the fine one.
-TEST_P(EffectiveTensorDim, CoarseMassEqualsFineMass) {
+// Mass: with a coarse mesh that covers the fine one, every coarse mass (coarse.mass) has the
+// fine total mass; the lumped and Galerkin ones also its first moments, since the barycentric
+// map P is a partition of unity that reproduces affine fields (Σ_a P_ia x_a = x_i), to
+// round-off (1e-12 relative).
+TEST_P(EffectiveTensorDim, CoarseMassHasTheFineMassAndMoments) {
     const int dim = GetParam();
-    const test::Setup s = test::setup(spheres_scene(dim));
-    const coarsen::CoarseModel m =
-        homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor");
-    const double fine_mass =
-        fem::mass_matrix(s.fine.mesh, s.fine.materials, fem::MassType::Lumped).diagonal().sum() /
-        dim;
-    EXPECT_NEAR(m.mass.sum() / dim, fine_mass, 1e-12 * fine_mass);
-    EXPECT_NEAR(m.report["mass"]["coarse"].get<double>(), fine_mass, 1e-12 * fine_mass);
+    for (const char* type : {"lumped", "consistent", "galerkin"}) {
+        json j = spheres_scene(dim);
+        j["coarse"]["mass"] = type;
+        const test::Setup s = test::setup(j);
+        const coarsen::CoarseModel m =
+            homogenize::build_coarse_model(s.scene, s.fine, "effective-tensor");
+        const SparseMatrix M =
+            fem::mass_matrix(s.fine.mesh, s.fine.materials, fem::MassType::Consistent);
+        const SparseMatrix Mc = m.mass(M);
+        ASSERT_EQ(Mc.rows(), m.K.rows());
+        const mesh::Mesh& coarse = *s.scene.coarse.mesh;
+        for (int d = 0; d < dim; ++d) {
+            const Vector e_f = sim::uniform_field(M.rows(), Eigen::VectorXd::Unit(dim, d));
+            const Vector e_c = sim::uniform_field(Mc.rows(), Eigen::VectorXd::Unit(dim, d));
+            const double fine_mass = e_f.dot(M * e_f), coarse_mass = e_c.dot(Mc * e_c);
+            EXPECT_NEAR(coarse_mass, fine_mass, 1e-12 * fine_mass) << type;
+            if (std::string(type) == "consistent") continue;  // element-mean densities
+            for (int a = 0; a < dim; ++a) {  // first moment ∫ρ x_a along component d
+                Vector x_f = Vector::Zero(M.rows()), x_c = Vector::Zero(Mc.rows());
+                for (Index v = 0; v < s.fine.mesh.num_nodes(); ++v)
+                    x_f[dim * v + d] = s.fine.mesh.rest_positions(v, a);
+                for (Index v = 0; v < coarse.num_nodes(); ++v)
+                    x_c[dim * v + d] = coarse.rest_positions(v, a);
+                const double fine_moment = e_f.dot(M * x_f), coarse_moment = e_c.dot(Mc * x_c);
+                EXPECT_NEAR(coarse_moment, fine_moment, 1e-12 * fine_mass) << type;
+            }
+        }
+        EXPECT_NEAR(m.report["mass"]["coarse"].get<double>(), total_mass(M, dim),
+                    1e-12 * total_mass(M, dim));
+    }
 }
 
 // A cavity weighs nothing: a cube with a cubic cavity of 1/27 of its volume, coarsened to the 6
@@ -227,10 +257,17 @@ TEST(EffectiveTensor, CavityWeighsNothing) {
     ASSERT_EQ(c.element_mass.size(), 6);
     for (Index q = 0; q < 6; ++q)
         EXPECT_NEAR(c.element_mass[q], rho * (1 - 1.0 / 27) / 6, 1e-13);  // exact overlaps
+    // The lumped coarse mass has the fine total and the fine first moment, whose centre is the
+    // cube's by symmetry.
     const coarsen::CoarseModel m = homogenize::coarse_model(sc, fine, c);
-    EXPECT_NEAR(m.mass.sum() / 3, rho * (1 - 1.0 / 27), 1e-13);
-    // Node 0 belongs to all six tets: 6 quarter shares.
-    EXPECT_NEAR(m.mass[0], 1.5 * rho * (1 - 1.0 / 27) / 6, 1e-13);
+    const Vector masses =
+        m.mass(fem::mass_matrix(fine.mesh, fine.materials, fem::MassType::Lumped)).diagonal();
+    const mesh::Mesh& coarse = *sc.coarse.mesh;
+    Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+    for (Index v = 0; v < coarse.num_nodes(); ++v)
+        moment += masses[3 * v] * coarse.rest_positions.row(v).transpose();
+    EXPECT_NEAR(masses.sum() / 3, rho * (1 - 1.0 / 27), 1e-13);
+    EXPECT_LT((moment - Eigen::Vector3d::Constant(0.5 * rho * (1 - 1.0 / 27))).norm(), 1e-13);
 }
 
 // The coarse model's file (coarse_model.vtu) carries everything a simulation needs: read back as

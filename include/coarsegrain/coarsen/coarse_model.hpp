@@ -96,7 +96,12 @@ struct CoarseModel {
     Vector f;            ///< coarse load, one entry per coarse DOF
     fem::Dirichlet bc;   ///< coarse Dirichlet conditions (empty when built into K)
     FineMap to_fine;     ///< fine DOFs x coarse DOFs: u_fine = to_fine * u_coarse
-    Vector mass;         ///< lumped mass per coarse DOF; empty if the method defines none
+    /// The coarse mass for the fine mass M (fine DOFs square; consistent or lumped), computed
+    /// on request since only dynamics needs it: coarse DOFs square, symmetric positive
+    /// semi-definite (definite where the coarse DOFs carry fine mass). Empty if the method
+    /// defines none. Effective tensors and baselines: by coarse.mass (homogenize::CoarseMass);
+    /// mra: the Galerkin mass through the hierarchy.
+    std::function<SparseMatrix(const SparseMatrix& M)> mass;
     Timings timings;     ///< build phases; their sum is reported as coarse.timings.build
     nlohmann::json report = nlohmann::json::object();  ///< method figures for summary "coarse"
     std::vector<VtuOutput> outputs;                    ///< extra files for the output folder

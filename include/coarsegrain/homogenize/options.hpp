@@ -4,6 +4,21 @@
 
 namespace coarsegrain::homogenize {
 
+/// coarse.mass: the coarse model's mass, from the fine mass M and the coarse-to-fine map P.
+enum class CoarseMass {
+    /// Diagonal, m_c = Pᵀ (M 1): the lumped mass ∫ρ N_a around each coarse node from the fine
+    /// density (Kharevych et al. 2009, Sec. 3, "Kinetic Energy"). P is a partition of unity that
+    /// reproduces affine fields, so the total mass and the first moments are the fine ones.
+    Lumped,
+    /// The consistent mass of the coarse elements with their mean fine density (mass inside
+    /// the element over its measure): exact total mass, but each element's mass sits at its
+    /// centre of volume, not of mass.
+    Consistent,
+    /// M_c = Pᵀ M P: the kinetic energy of every coarse velocity is that of its fine image (the
+    /// paper's future work). Sparse, with the couplings of PᵀP.
+    Galerkin,
+};
+
 /// The scene's "coarse" keys the effective-tensor method and its baselines read.
 struct Options {
     /// coarse.normals: "coarse" (default: the traction of Eq. 6 uses the normal of the nearest
@@ -19,6 +34,8 @@ struct Options {
     /// With a mixed boundary where elements fell back, the map uses the pure-Neumann fields
     /// (the mixed ones are singular on those elements).
     bool harmonic_map = false;
+    /// coarse.mass: "lumped" (default), "consistent" or "galerkin" (CoarseMass).
+    CoarseMass mass = CoarseMass::Lumped;
 };
 
 }  // namespace coarsegrain::homogenize

@@ -124,6 +124,12 @@ Vector coarse_grain(const Hierarchy& h, const Vector& g_fine, int k);
 /// @throws Error if k is not in 1..q
 SparseMatrix basis(const Hierarchy& h, int k);
 
+/// The Galerkin image on level k of an operator over the fine grid DOFs (the mass, Chen 2019
+/// Sec. 4.2): X^q = X restricted to the hierarchy's fine DOFs, X^l = C̃^l X^{l+1} C̃^{l,T} for
+/// l = q-1..k, i.e. Φ^k X Φ^{k,T}. Both triangles stored.
+/// @throws Error if k is not in 1..q or X is not fine grid DOFs square
+SparseMatrix galerkin_operator(const Hierarchy& h, const SparseMatrix& X, int k);
+
 /// Φ^{k,T} u^k over all fine grid DOFs, computed level by level as
 /// u^{l+1} = C̃^{l,T} u^l for l = k..q-1 (zeros at eliminated DOFs), without Φ^k.
 /// @throws Error if k is not in 1..q or u_k has the wrong size

@@ -19,6 +19,7 @@
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/mra/options.hpp"
+#include "coarsegrain/sim/dynamics.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 
 namespace coarsegrain::scene {
@@ -73,6 +74,8 @@ struct Scene {
     solve::SolverOptions solver;
     /// The "coarse" block, parsed and validated (CoarseOptions).
     CoarseOptions coarse;
+    /// "dynamics": time stepping of `coarsegrain simulate` (absent: none; simulate requires it).
+    std::optional<sim::DynamicsOptions> dynamics;
     /// Folder that relative file names in the scene are resolved against.
     std::string base_dir;
 };
@@ -80,6 +83,12 @@ struct Scene {
 /// Parses and validates a "coarse" block's options, all but coarse.mesh (null: defaults).
 /// @throws InvalidScene naming coarse.<key>, the expected values and `source`
 CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::string& source);
+
+/// Parses and validates a "dynamics" block (all but initial_velocity's size, checked against
+/// the scene's dimension by parse_scene).
+/// @throws InvalidScene naming dynamics.<key>, the expected values and `source`
+sim::DynamicsOptions parse_dynamics_options(const nlohmann::json& dynamics,
+                                            const std::string& source);
 
 /// Parses scene JSON text. Rejects duplicate keys (naming the key's path: a repeated key
 /// would otherwise silently win) and numbers beyond double range.

@@ -14,6 +14,9 @@
 
 namespace coarsegrain::sim {
 
+/// The most steps a run may take (dynamics.steps).
+constexpr int kMaxSteps = 100'000'000;
+
 enum class Integrator {
     /// Implicit midpoint: u' = u + dt/2 (v + v'), M (v' - v) = dt (f - K (u + u')/2 -
     /// C (v + v')/2). Symplectic, second order; undamped it conserves the discrete energy

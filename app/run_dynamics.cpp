@@ -1,0 +1,459 @@
+#include "run_dynamics.hpp"
+
+#include <fmt/format.h>
+#include <omp.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "coarsegrain/coarsen/runtime.hpp"
+#include "coarsegrain/common/error.hpp"
+#include "coarsegrain/fem/assembly.hpp"
+#include "coarsegrain/io/table.hpp"
+#include "coarsegrain/sim/dynamics.hpp"
+#include "coarsegrain/sim/modes.hpp"
+#include "output.hpp"
+#include "plots.hpp"
+
+namespace coarsegrain::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// The fine model with its mass.
+struct FineDynamics {
+    scene::FineModel model;
+    SparseMatrix M;
+    Timings timings;
+};
+
+FineDynamics build_fine(const scene::Scene& sc, fem::MassType mass, double read_seconds) {
+    FineDynamics f;
+    f.timings.add("read", read_seconds);
+    f.model = scene::build_fine_model(sc, &f.timings);
+    print_warnings(f.model.warnings);
+    const Phase phase("mass", &f.timings);
+    f.M = fem::mass_matrix(f.model.mesh, f.model.materials, mass);
+    return f;
+}
+
+double sum(const Timings& t) {
+    double s = 0;
+    for (const auto& [phase, seconds] : t.entries()) s += seconds;
+    return s;
+}
+
+/// A coarse model and its mass for the fine mass M, with the phase "mass" in its timings.
+struct CoarseDynamics {
+    coarsen::CoarseModel model;
+    SparseMatrix M;
+    Timings timings;  ///< "build" (the method's phases summed), "mass", then the run's
+};
+
+CoarseDynamics build_coarse(const scene::Scene& sc, const FineDynamics& fine,
+                            const std::string& method) {
+    CoarseDynamics c;
+    c.model = coarsen::build_coarse_model(sc, fine.model, method);
+    CG_VERIFY(static_cast<bool>(c.model.mass), "{}: method {} defines no coarse mass", sc.source,
+              method);
+    c.timings.add("build", sum(c.model.timings));
+    const Phase phase("mass", &c.timings);
+    c.M = c.model.mass(fine.M);
+    return c;
+}
+
+std::vector<std::string> check_methods(const scene::Scene& sc,
+                                       const std::vector<std::string>& methods) {
+    for (const std::string& m : methods) coarsen::validate_method(sc, m);
+    return methods;
+}
+
+/// Whether `bytes` fit in half the physical memory (0 if unknown: assume they do).
+bool fits_in_memory(double bytes) {
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    return pages <= 0 || page <= 0 || bytes <= 0.5 * static_cast<double>(pages) * page;
+}
+
+std::string frame_file(const std::string& series, std::size_t i) {
+    return fmt::format("{}/frame_{:05d}.vtu", series, i);
+}
+
+/// Writes one frame of a series (displacement, its magnitude, and its error against `reference`
+/// if given) and returns its (time, file) for the .pvd.
+std::pair<double, std::string> write_frame(const fs::path& dir, const std::string& series,
+                                           std::size_t i, double time, const mesh::Mesh& mesh,
+                                           const Vector& u, const Vector* reference) {
+    const int dim = mesh.dim();
+    io::VtuFields fields;
+    fields.add_point_vector("displacement", u, dim);
+    fields.add_point_scalar("displacement_magnitude", nodal_magnitude(u, dim));
+    if (reference) fields.add_point_vector("error", u - *reference, dim);
+    const std::string file = frame_file(series, i);
+    io::write_vtu((dir / file).string(), mesh, fields);
+    return {time, file};
+}
+
+/// One model's run carried to the fine mesh: probe trajectories and its errors against the fine
+/// trajectory.
+struct RunResult {
+    std::vector<std::vector<Eigen::VectorXd>> probes;  ///< [time][probe]
+    double trajectory_l2_rel = 0, probe_max_rel = 0;
+};
+
+nlohmann::json probe_series(const std::vector<std::vector<Eigen::VectorXd>>& probes,
+                            std::size_t p) {
+    nlohmann::json series = nlohmann::json::array();
+    for (const auto& at : probes) series.push_back(to_std(at[p]));
+    return series;
+}
+
+/// Steps the coarse model from the state matching the fine start, carries every saved frame to
+/// the fine mesh, writes it and compares it with the fine frame of the same time.
+RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine,
+                     const sim::Trajectory& fine_run,
+                     const std::vector<std::vector<Eigen::VectorXd>>& fine_probes,
+                     CoarseDynamics& c, const std::string& method, const fs::path& dir) {
+    const sim::DynamicsOptions& o = *sc.dynamics;
+    const coarsen::CoarseModel& m = c.model;
+    const Vector v0 = sim::uniform_field(m.K.rows(), o.initial_velocity);
+    std::pair<sim::State, Vector> start;
+    {
+        const Phase phase(method + " initial state", &c.timings);
+        start = sim::initial_state(m.K, m.f, m.bc, v0, o, sc.solver);
+    }
+    const sim::Trajectory run =
+        sim::simulate(m.K, c.M, m.bc, start.first, start.second, o, sc.solver, method);
+    c.timings.add("factorize", run.factorize_seconds);
+    c.timings.add("per_step", run.per_step_seconds);
+    RunResult r;
+    std::vector<std::pair<double, std::string>> frames;
+    double diff2 = 0, norm2 = 0, probe_diff = 0, probe_max = 0;
+    {
+        const Phase phase(method + " write frames", &c.timings);
+        fs::create_directories(dir / method);
+        for (std::size_t i = 0; i < run.times.size(); ++i) {
+            const Vector u = m.to_fine * run.u[i];
+            const Vector& u_fine = fine_run.u[i];
+            diff2 += (u - u_fine).squaredNorm();
+            norm2 += u_fine.squaredNorm();
+            r.probes.push_back(scene::probe_displacements(sc, fine.model.mesh, u));
+            for (std::size_t p = 0; p < sc.probes.size(); ++p) {
+                probe_diff = std::max(probe_diff, (r.probes.back()[p] - fine_probes[i][p]).norm());
+                probe_max = std::max(probe_max, fine_probes[i][p].norm());
+            }
+            frames.push_back(
+                write_frame(dir, method, i, run.times[i], fine.model.mesh, u, &u_fine));
+        }
+        io::write_pvd((dir / (method + ".pvd")).string(), frames);
+    }
+    r.trajectory_l2_rel = norm2 > 0 ? std::sqrt(diff2 / norm2) : std::sqrt(diff2);
+    r.probe_max_rel = probe_max > 0 ? probe_diff / probe_max : probe_diff;
+    return r;
+}
+
+const char* axis_name(int d) { return d == 0 ? "x" : d == 1 ? "y" : "z"; }
+
+/// trajectory.csv: time, then <model>_p<probe>_<axis> for the fine model and each method.
+io::Table trajectory_table(const std::vector<double>& times,
+                           const std::vector<std::pair<std::string, const RunResult*>>& runs,
+                           std::size_t probes, int dim) {
+    io::Table t;
+    t.name = "trajectory";
+    t.columns.push_back("time");
+    for (const auto& [name, run] : runs)
+        for (std::size_t p = 0; p < probes; ++p)
+            for (int d = 0; d < dim; ++d)
+                t.columns.push_back(fmt::format("{}_p{}_{}", name, p, axis_name(d)));
+    t.values.resize(static_cast<Index>(times.size()), static_cast<Index>(t.columns.size()));
+    for (std::size_t i = 0; i < times.size(); ++i) {
+        Index c = 0;
+        t.values(static_cast<Index>(i), c++) = times[i];
+        for (const auto& [name, run] : runs)
+            for (std::size_t p = 0; p < probes; ++p)
+                for (int d = 0; d < dim; ++d)
+                    t.values(static_cast<Index>(i), c++) = run->probes[i][p][d];
+    }
+    return t;
+}
+
+nlohmann::json fine_json(const FineDynamics& f) {
+    nlohmann::json j = fine_sizes(f.model);
+    j["timings"] = timings_json(f.timings);
+    return j;
+}
+
+}  // namespace
+
+int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods,
+                 const std::string& out_dir, double read_seconds) {
+    CG_VERIFY_AS(InvalidScene, sc.dynamics.has_value(),
+                 "{}: simulate needs a \"dynamics\" block (at least \"dt\" and \"steps\"; "
+                 "docs/guide.md, \"Dynamics\")",
+                 sc.source);
+    const sim::DynamicsOptions& o = *sc.dynamics;
+    check_methods(sc, methods);
+    const OutputFolder folder(out_dir);
+    const fs::path dir(out_dir);
+    FineDynamics fine = build_fine(sc, o.mass, read_seconds);
+    const scene::FineModel& fm = fine.model;
+    const double frames = 1.0 + o.steps / o.output_every;
+    CG_VERIFY(fits_in_memory(frames * static_cast<double>(fm.K.rows()) * 8),
+              "{}: dynamics.output_every: {:.0f} saved frames of {} DOFs need {:.1f} GB, more "
+              "than half this machine's memory; save fewer frames",
+              sc.source, frames, fm.K.rows(), frames * static_cast<double>(fm.K.rows()) * 8e-9);
+
+    std::pair<sim::State, Vector> start;
+    {
+        const Phase phase("initial state", &fine.timings);
+        start = sim::initial_state(
+            fm.K, fm.f, fm.bc, sim::uniform_field(fm.K.rows(), o.initial_velocity), o, sc.solver);
+    }
+    const sim::Trajectory run =
+        sim::simulate(fm.K, fine.M, fm.bc, start.first, start.second, o, sc.solver, "fine");
+    fine.timings.add("factorize", run.factorize_seconds);
+    fine.timings.add("per_step", run.per_step_seconds);
+    RunResult fine_result;
+    {
+        const Phase phase("write frames", &fine.timings);
+        fs::create_directories(dir / "fine");
+        std::vector<std::pair<double, std::string>> frames_written;
+        for (std::size_t i = 0; i < run.times.size(); ++i) {
+            fine_result.probes.push_back(scene::probe_displacements(sc, fm.mesh, run.u[i]));
+            frames_written.push_back(
+                write_frame(dir, "fine", i, run.times[i], fm.mesh, run.u[i], nullptr));
+        }
+        io::write_pvd((dir / "fine.pvd").string(), frames_written);
+    }
+
+    std::vector<RunResult> results(methods.size());
+    std::vector<nlohmann::json> entries;
+    int failed = 0;
+    for (std::size_t k = 0; k < methods.size(); ++k) {
+        const std::string& method = methods[k];
+        nlohmann::json e = {{"method", method}};
+        try {
+            CoarseDynamics c = build_coarse(sc, fine, method);
+            results[k] = run_coarse(sc, fine, run, fine_result.probes, c, method, dir);
+            nlohmann::json probes = nlohmann::json::array();
+            for (std::size_t p = 0; p < sc.probes.size(); ++p)
+                probes.push_back({{"point", to_std(sc.probes[p])},
+                                  {"u_fine", probe_series(fine_result.probes, p)},
+                                  {"u", probe_series(results[k].probes, p)}});
+            e["coarse"] = {{"nodes", c.model.nodes},
+                           {"elements", c.model.elements},
+                           {"dofs", c.model.K.rows()},
+                           {"timings", timings_json(c.timings)}};
+            e["probes"] = probes;
+            e["timings"] = {{"fine", timings_json(fine.timings)},
+                            {"coarse", timings_json(c.timings)}};
+            e["speedup"] = {{"per_step", run.per_step_seconds / c.timings["per_step"]}};
+            e["errors"] = {{"trajectory_l2_rel", results[k].trajectory_l2_rel},
+                           {"probe_max_rel", results[k].probe_max_rel}};
+            e["pvd"] = method + ".pvd";
+        } catch (const Error& err) {
+            if (methods.size() == 1) throw;
+            std::fprintf(stderr, "error: method %s: %s\n", method.c_str(), err.what());
+            e["error"] = err.what();
+            ++failed;
+        }
+        entries.push_back(std::move(e));
+    }
+
+    std::vector<std::pair<std::string, const RunResult*>> runs = {{"fine", &fine_result}};
+    for (std::size_t k = 0; k < methods.size(); ++k)
+        if (!entries[k].contains("error")) runs.emplace_back(methods[k], &results[k]);
+    const int dim = fm.mesh.dim();
+    io::write_csv(trajectory_table(run.times, runs, sc.probes.size(), dim),
+                  (dir / "trajectory.csv").string());
+    nlohmann::json plots = nlohmann::json::array();
+    if (!sc.probes.empty()) {
+        const PlotOutput plot{
+            "plot_trajectory.py", {"trajectory.png", "trajectory.csv"}, {"trajectory.png"}};
+        if (make_plot(out_dir, plot)) plots.push_back("trajectory.png");
+    }
+
+    nlohmann::json summary = {
+        {"command", "simulate"},
+        {"scene", sc.source},
+        {"fine", fine_json(fine)},
+        {"dynamics",
+         {{"integrator", sim::integrator_name(o.integrator)},
+          {"dt", o.dt},
+          {"steps", o.steps},
+          {"output_every", o.output_every},
+          {"start", o.start == sim::Start::Rest ? "rest" : "static"},
+          {"mass", o.mass == fem::MassType::Consistent ? "consistent" : "lumped"}}},
+        {"times", run.times},
+        {"solver", solve::backend_name(sc.solver.backend)},
+        {"threads", omp_get_max_threads()},
+        {"warnings", fm.warnings},
+        {"pvd", "fine.pvd"},
+        {"plots", plots},
+    };
+    nlohmann::json probes = nlohmann::json::array();
+    for (std::size_t p = 0; p < sc.probes.size(); ++p)
+        probes.push_back(
+            {{"point", to_std(sc.probes[p])}, {"u_fine", probe_series(fine_result.probes, p)}});
+    summary["probes"] = probes;
+    summary["timings"] = {{"fine", timings_json(fine.timings)}};
+    if (methods.size() == 1 && !entries[0].contains("error")) {
+        summary.update(entries[0]);
+    } else if (!methods.empty()) {
+        summary["methods"] = entries;
+        summary["failed_methods"] = failed;
+    }
+    summary["peak_memory_mb"] = peak_rss_mb();
+    write_summary(out_dir, summary);
+
+    std::printf("coarsegrain simulate: %s, %s, dt %g, %d steps\n", sc.source.c_str(),
+                sim::integrator_name(o.integrator).c_str(), o.dt, o.steps);
+    std::printf("  %-20s %9s %12s %12s %10s %12s\n", "model", "DOFs", "factorize s", "per step s",
+                "speedup", "traj. l2");
+    std::printf("  %-20s %9d %12.4f %12.3e %10s %12s\n", "fine", fm.mesh.num_dofs(),
+                run.factorize_seconds, run.per_step_seconds, "", "");
+    for (const nlohmann::json& e : entries) {
+        if (e.contains("error")) {
+            std::printf("  %-20s failed: %s\n", e["method"].get<std::string>().c_str(),
+                        e["error"].get<std::string>().c_str());
+            continue;
+        }
+        std::printf(
+            "  %-20s %9d %12.4f %12.3e %9.1fx %12.4g\n", e["method"].get<std::string>().c_str(),
+            e["coarse"]["dofs"].get<int>(), e["timings"]["coarse"]["factorize"].get<double>(),
+            e["timings"]["coarse"]["per_step"].get<double>(),
+            e["speedup"]["per_step"].get<double>(), e["errors"]["trajectory_l2_rel"].get<double>());
+    }
+    std::printf("  wrote %s/fine.pvd, trajectory.csv and summary.json\n", out_dir.c_str());
+    return failed;
+}
+
+int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, int count,
+              const std::string& out_dir, double read_seconds) {
+    check_methods(sc, methods);
+    const OutputFolder folder(out_dir);
+    const fs::path dir(out_dir);
+    const fem::MassType mass = sc.dynamics ? sc.dynamics->mass : fem::MassType::Consistent;
+    FineDynamics fine = build_fine(sc, mass, read_seconds);
+    const scene::FineModel& fm = fine.model;
+    sim::Modes fine_modes;
+    {
+        const Phase phase("eigenpairs", &fine.timings);
+        fine_modes = sim::modes(fm.K, fine.M, fm.bc, count, sc.solver);
+    }
+    const Index k = fine_modes.eigenvalues.size();
+    std::vector<io::VtuFields> mode_fields(static_cast<std::size_t>(k));
+    for (Index i = 0; i < k; ++i)
+        mode_fields[static_cast<std::size_t>(i)].add_point_vector("mode", fine_modes.vectors.col(i),
+                                                                  fm.mesh.dim());
+
+    io::Table table;
+    table.name = "frequencies";
+    table.columns = {"mode", "fine_hz"};
+    Matrix columns(k, 0);
+    std::vector<nlohmann::json> entries;
+    int failed = 0;
+    for (const std::string& method : methods) {
+        nlohmann::json e = {{"method", method}};
+        try {
+            CoarseDynamics c = build_coarse(sc, fine, method);
+            sim::Modes cm;
+            {
+                const Phase phase(method + " eigenpairs", &c.timings);
+                cm = sim::modes(c.model.K, c.M, c.model.bc, count, sc.solver);
+            }
+            const Matrix carried = c.model.to_fine * cm.vectors;
+            const std::vector<sim::ModePair> pairs = sim::pair_modes(fine_modes.vectors, carried);
+            std::vector<double> rel, mac, paired, paired_hz;
+            for (Index i = 0; i < k; ++i) {
+                const sim::ModePair& p = pairs[static_cast<std::size_t>(i)];
+                const double fc = cm.frequencies_hz[p.coarse], ff = fine_modes.frequencies_hz[i];
+                rel.push_back(std::abs(fc - ff) / ff);
+                mac.push_back(p.mac);
+                paired.push_back(static_cast<double>(p.coarse));
+                paired_hz.push_back(fc);
+                mode_fields[static_cast<std::size_t>(i)].add_point_vector(
+                    "mode_" + method, carried.col(p.coarse), fm.mesh.dim());
+            }
+            e["coarse"] = {{"nodes", c.model.nodes},
+                           {"elements", c.model.elements},
+                           {"dofs", c.model.K.rows()},
+                           {"frequencies_hz", to_std(cm.frequencies_hz)},
+                           {"timings", timings_json(c.timings)}};
+            e["errors"] = {{"frequency_rel", rel}};
+            e["mac"] = mac;
+            e["mac_pairs"] = paired;
+            table.columns.push_back(method + "_hz");
+            table.columns.push_back(method + "_mac");
+            columns.conservativeResize(k, columns.cols() + 2);
+            columns.col(columns.cols() - 2) = Eigen::Map<const Vector>(paired_hz.data(), k);
+            columns.col(columns.cols() - 1) = Eigen::Map<const Vector>(mac.data(), k);
+        } catch (const Error& err) {
+            if (methods.size() == 1) throw;
+            std::fprintf(stderr, "error: method %s: %s\n", method.c_str(), err.what());
+            e["error"] = err.what();
+            ++failed;
+        }
+        entries.push_back(std::move(e));
+    }
+    {
+        const Phase phase("write", &fine.timings);
+        for (Index i = 0; i < k; ++i)
+            io::write_vtu((dir / fmt::format("mode_{:02d}.vtu", i + 1)).string(), fm.mesh,
+                          mode_fields[static_cast<std::size_t>(i)]);
+        table.values.resize(k, 2 + columns.cols());
+        for (Index i = 0; i < k; ++i) {
+            table.values(i, 0) = static_cast<double>(i + 1);
+            table.values(i, 1) = fine_modes.frequencies_hz[i];
+        }
+        table.values.rightCols(columns.cols()) = columns;
+        io::write_csv(table, (dir / "frequencies.csv").string());
+    }
+    nlohmann::json plots = nlohmann::json::array();
+    if (columns.cols() > 0 && make_plot(out_dir, {"plot_frequencies.py",
+                                                  {"frequencies.png", "frequencies.csv"},
+                                                  {"frequencies.png"}}))
+        plots.push_back("frequencies.png");
+
+    nlohmann::json fj = fine_json(fine);
+    fj["frequencies_hz"] = to_std(fine_modes.frequencies_hz);
+    nlohmann::json summary = {{"command", "modes"},
+                              {"scene", sc.source},
+                              {"fine", fj},
+                              {"count", k},
+                              {"mass", mass == fem::MassType::Consistent ? "consistent" : "lumped"},
+                              {"solver", solve::backend_name(sc.solver.backend)},
+                              {"threads", omp_get_max_threads()},
+                              {"warnings", fm.warnings},
+                              {"plots", plots}};
+    if (methods.size() == 1 && !entries[0].contains("error")) {
+        summary.update(entries[0]);
+    } else if (!methods.empty()) {
+        summary["methods"] = entries;
+        summary["failed_methods"] = failed;
+    }
+    summary["peak_memory_mb"] = peak_rss_mb();
+    write_summary(out_dir, summary);
+
+    std::printf("coarsegrain modes: %s, %d lowest modes (Hz)\n", sc.source.c_str(),
+                static_cast<int>(k));
+    std::printf("  %4s %12s", "mode", "fine");
+    for (const nlohmann::json& e : entries)
+        if (!e.contains("error")) std::printf(" %18s", e["method"].get<std::string>().c_str());
+    std::printf("\n");
+    for (Index i = 0; i < k; ++i) {
+        std::printf("  %4d %12.6g", static_cast<int>(i + 1), fine_modes.frequencies_hz[i]);
+        for (const nlohmann::json& e : entries)
+            if (!e.contains("error"))
+                std::printf(" %12.6g (%+.0f%%)",
+                            e["coarse"]["frequencies_hz"][e["mac_pairs"][i].get<std::size_t>()]
+                                .get<double>(),
+                            100 * e["errors"]["frequency_rel"][i].get<double>());
+        std::printf("\n");
+    }
+    std::printf("  wrote %s/mode_*.vtu, frequencies.csv and summary.json\n", out_dir.c_str());
+    return failed;
+}
+
+}  // namespace coarsegrain::app

@@ -1,0 +1,55 @@
+#!/usr/bin/python3
+"""Plots each method's natural frequencies against the fine model's, mode by mode.
+
+Usage: /usr/bin/python3 scripts/plot_frequencies.py OUT.png FREQUENCIES.csv
+
+FREQUENCIES.csv is written by `coarsegrain modes --method ...` (frequencies.csv): columns mode,
+fine_hz, then <method>_hz (the coarse mode paired with each fine mode by the modal assurance
+criterion) and <method>_mac for each method, one row per fine mode. Left: paired coarse against
+fine frequency (the diagonal is exact); right: the relative error per mode.
+"""
+import sys
+
+import numpy as np
+
+
+def main(argv):
+    if len(argv) != 2:
+        sys.exit(__doc__)
+    out, path = argv
+    try:
+        with open(path, encoding="utf-8") as f:
+            header = f.readline().strip().split(",")
+    except OSError as e:
+        sys.exit(f"plot_frequencies: cannot read {path}: {e}")
+    if header[:2] != ["mode", "fine_hz"]:
+        sys.exit(f"plot_frequencies: {path}: the first columns must be 'mode', 'fine_hz'")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    mode, fine = data[:, 0], data[:, 1]
+    methods = [c[:-3] for c in header[2:] if c.endswith("_hz")]
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
+    top = fine.max()
+    for m in methods:
+        hz = data[:, header.index(m + "_hz")]
+        top = max(top, hz.max())
+        left.plot(fine, hz, "o", label=m)
+        right.semilogy(mode, np.maximum(np.abs(hz - fine) / fine, 1e-16), "o-", label=m)
+    left.plot([0, top], [0, top], "k--", linewidth=1, label="exact")
+    left.set_xlabel("fine frequency (Hz)")
+    left.set_ylabel("paired coarse frequency (Hz)")
+    left.legend(fontsize=8)
+    right.set_xlabel("fine mode")
+    right.set_ylabel("|f_coarse - f_fine| / f_fine")
+    right.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
