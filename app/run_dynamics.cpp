@@ -128,6 +128,7 @@ RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine,
     c.timings.add("factorize", run.factorize_seconds);
     c.timings.add("per_step", run.per_step_seconds);
     RunResult r;
+    const scene::ProbeSampler probes(sc, fine.model.mesh);
     std::vector<std::pair<double, std::string>> frames;
     double diff2 = 0, norm2 = 0, probe_diff = 0, probe_max = 0;
     {
@@ -138,7 +139,7 @@ RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine,
             const Vector& u_fine = fine_run.u[i];
             diff2 += (u - u_fine).squaredNorm();
             norm2 += u_fine.squaredNorm();
-            r.probes.push_back(scene::probe_displacements(sc, fine.model.mesh, u));
+            r.probes.push_back(probes(u));
             for (std::size_t p = 0; p < sc.probes.size(); ++p) {
                 probe_diff = std::max(probe_diff, (r.probes.back()[p] - fine_probes[i][p]).norm());
                 probe_max = std::max(probe_max, fine_probes[i][p].norm());
@@ -219,8 +220,9 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
         const Phase phase("write frames", &fine.timings);
         fs::create_directories(dir / "fine");
         std::vector<std::pair<double, std::string>> frames_written;
+        const scene::ProbeSampler probes(sc, fm.mesh);
         for (std::size_t i = 0; i < run.times.size(); ++i) {
-            fine_result.probes.push_back(scene::probe_displacements(sc, fm.mesh, run.u[i]));
+            fine_result.probes.push_back(probes(run.u[i]));
             frames_written.push_back(
                 write_frame(dir, "fine", i, run.times[i], fm.mesh, run.u[i], nullptr));
         }

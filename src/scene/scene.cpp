@@ -42,10 +42,14 @@ constexpr std::int64_t kMaxGridCells = 100000;
 /// 6-tet split of a cube touches 15 nodes, of the 2-triangle split of a square 7.
 int grid_nonzeros_per_dof(mesh::ElementType type) {
     switch (type) {
-        case mesh::ElementType::Hex8: return 27 * 3;
-        case mesh::ElementType::Tet4: return 15 * 3;
-        case mesh::ElementType::Quad4: return 9 * 2;
-        default: return 7 * 2;
+        case mesh::ElementType::Hex8:
+            return 27 * 3;
+        case mesh::ElementType::Tet4:
+            return 15 * 3;
+        case mesh::ElementType::Quad4:
+            return 9 * 2;
+        default:
+            return 7 * 2;
     }
 }
 
@@ -343,10 +347,10 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
             const JsonReader entry = m->at(key);
             int id = 0;
             const auto [end, ec] = std::from_chars(key.data(), key.data() + key.size(), id);
-            entry.fail_unless(ec == std::errc() && end == key.data() + key.size() &&
-                                  std::to_string(id) == key,
-                              "material keys must be integer ids written without sign or "
-                              "leading zeros (\"1\", not \"01\" or \"+1\")");
+            entry.fail_unless(
+                ec == std::errc() && end == key.data() + key.size() && std::to_string(id) == key,
+                "material keys must be integer ids written without sign or "
+                "leading zeros (\"1\", not \"01\" or \"+1\")");
             s.materials[id] = parse_material(entry, dim, s.plane);
         }
     }
@@ -435,8 +439,7 @@ json parse_json(std::string_view text, const std::string& source) {
 
 Scene load_scene(const std::string& file) {
     std::error_code ec;
-    CG_VERIFY_AS(InvalidScene, fs::is_regular_file(file, ec),
-                 "cannot open scene file {}: {}", file,
+    CG_VERIFY_AS(InvalidScene, fs::is_regular_file(file, ec), "cannot open scene file {}: {}", file,
                  fs::exists(file, ec) ? "not a regular file" : "no such file");
     std::ifstream in(file, std::ios::binary);
     CG_VERIFY_AS(InvalidScene, in.good(), "cannot open scene file {}", file);
@@ -449,8 +452,8 @@ fem::Dirichlet dirichlet_conditions(const Scene& scene, const mesh::Mesh& mesh,
     fem::Dirichlet bc;
     for (const BoxCondition& c : scene.dirichlet) {
         const std::vector<Index> nodes = mesh::nodes_in_box(mesh, c.box.min, c.box.max);
-        CG_VERIFY_AS(InvalidScene, !nodes.empty(),
-                     "{}: {}.box selects no node of the {}{}", scene.source, c.key, what,
+        CG_VERIFY_AS(InvalidScene, !nodes.empty(), "{}: {}.box selects no node of the {}{}",
+                     scene.source, c.key, what,
                      what == "mesh" ? ""
                                     : " (the scene's boxes are applied again to it: widen the "
                                       "box to hold some of its nodes)");
@@ -466,9 +469,8 @@ Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
     if (scene.gravity.squaredNorm() > 0) f += fem::gravity_load(mesh, materials, scene.gravity);
     for (const BoxCondition& c : scene.traction) {
         const std::vector<Index> facets = mesh::facets_in_box(mesh, boundary, c.box.min, c.box.max);
-        CG_VERIFY_AS(InvalidScene, !facets.empty(),
-                     "{}: {}.box selects no boundary {} of the {}{}", scene.source, c.key,
-                     mesh.dim() == 3 ? "face" : "edge", what,
+        CG_VERIFY_AS(InvalidScene, !facets.empty(), "{}: {}.box selects no boundary {} of the {}{}",
+                     scene.source, c.key, mesh.dim() == 3 ? "face" : "edge", what,
                      what == "mesh" ? ""
                                     : " (the scene's boxes are applied again to it: widen the "
                                       "box to hold whole boundary facets of it)");
@@ -577,18 +579,27 @@ StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& 
     return s;
 }
 
-std::vector<Eigen::VectorXd> probe_displacements(const Scene& scene, const mesh::Mesh& m,
-                                                 const Vector& u) {
-    std::vector<Eigen::VectorXd> out;
-    if (scene.probes.empty()) return out;
+ProbeSampler::ProbeSampler(const Scene& scene, const mesh::Mesh& m) : m_mesh(&m) {
+    if (scene.probes.empty()) return;
     const mesh::PointLocator locator(m);
     for (std::size_t i = 0; i < scene.probes.size(); ++i) {
         const auto loc = locator.locate(scene.probes[i]);
         CG_VERIFY_AS(InvalidScene, loc.has_value(), "{}: probes[{}] = [{}] lies outside the mesh",
                      scene.source, i, fmt::join(scene.probes[i], ", "));
-        out.push_back(mesh::interpolate(m, *loc, u, m.dim()));
+        m_locations.push_back(*loc);
     }
+}
+
+std::vector<Eigen::VectorXd> ProbeSampler::operator()(const Vector& u) const {
+    std::vector<Eigen::VectorXd> out;
+    for (const mesh::Location& loc : m_locations)
+        out.push_back(mesh::interpolate(*m_mesh, loc, u, m_mesh->dim()));
     return out;
+}
+
+std::vector<Eigen::VectorXd> probe_displacements(const Scene& scene, const mesh::Mesh& m,
+                                                 const Vector& u) {
+    return ProbeSampler(scene, m)(u);
 }
 
 json demo_scene(double scale) {

@@ -18,6 +18,7 @@
 #include "coarsegrain/homogenize/options.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
+#include "coarsegrain/mesh/point_locator.hpp"
 #include "coarsegrain/mra/options.hpp"
 #include "coarsegrain/sim/dynamics.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
@@ -145,6 +146,20 @@ struct StaticSolution {
 ///         without a Dirichlet node (its size and centre), or else the materials' contrast
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
                             Timings* timings = nullptr);
+
+/// The scene's probes located once on a mesh, to sample many displacement fields (the frames
+/// of a time series).
+class ProbeSampler {
+  public:
+    /// @throws InvalidScene naming the first probe that lies outside the mesh
+    ProbeSampler(const Scene& scene, const mesh::Mesh& mesh);
+    /// Displacement at each probe point (size dim each) of u (mesh DOFs, interleaved).
+    std::vector<Eigen::VectorXd> operator()(const Vector& u) const;
+
+  private:
+    const mesh::Mesh* m_mesh;
+    std::vector<mesh::Location> m_locations;
+};
 
 /// Displacement at each probe point (size dim each).
 /// @throws InvalidScene naming the probe if it lies outside the mesh
