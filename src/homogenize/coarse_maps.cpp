@@ -1,5 +1,6 @@
 #include "coarsegrain/homogenize/coarse_maps.hpp"
 
+#include <Eigen/SparseCholesky>
 #include <cmath>
 
 #include "coarsegrain/common/error.hpp"
@@ -64,6 +65,44 @@ SparseMatrix barycentric_embedding(const mesh::Mesh& coarse,
     E.setFromTriplets(t.begin(), t.end());
     E.makeCompressed();
     return E;
+}
+
+fem::Dirichlet carry_dirichlet(const fem::Dirichlet& fine, const SparseMatrix& E) {
+    constexpr double kTouch = 1e-10;
+    std::vector<Index> row(static_cast<std::size_t>(E.rows()), -1);  // fine DOF -> condition
+    for (std::size_t k = 0; k < fine.dofs.size(); ++k) {
+        const Index d = fine.dofs[k];
+        CG_VERIFY(d >= 0 && d < E.rows(), "carry_dirichlet: fine Dirichlet DOF {} out of 0..{}", d,
+                  E.rows() - 1);
+        row[d] = static_cast<Index>(k);
+    }
+    fem::Dirichlet bc;
+    for (Index j = 0; j < E.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(E, j); it; ++it)
+            if (row[it.row()] >= 0 && std::abs(it.value()) > kTouch) {
+                bc.dofs.push_back(j);
+                break;
+            }
+    const Index nd = static_cast<Index>(bc.dofs.size());
+    bc.values = Vector::Zero(nd);
+    if (fine.values.isZero(0.0)) return bc;
+    // E_FD: the fixed fine rows by the fixed coarse columns.
+    std::vector<Eigen::Triplet<double, Index>> t;
+    for (Index c = 0; c < nd; ++c)
+        for (SparseMatrix::InnerIterator it(E, bc.dofs[c]); it; ++it)
+            if (row[it.row()] >= 0) t.emplace_back(row[it.row()], c, it.value());
+    SparseMatrix E_FD(static_cast<Index>(fine.dofs.size()), nd);
+    E_FD.setFromTriplets(t.begin(), t.end());
+    const SparseMatrix EtE = SparseMatrix(E_FD.transpose()) * E_FD;
+    const Vector weight = E_FD.cwiseAbs().transpose() * Vector::Ones(E_FD.rows());
+    const Vector mean = (E_FD.cwiseAbs().transpose() * fine.values).cwiseQuotient(weight);
+    const double eps = 1e-8 * EtE.diagonal().maxCoeff();
+    SparseMatrix A = EtE;
+    for (Index c = 0; c < nd; ++c) A.coeffRef(c, c) += eps;
+    const Eigen::SimplicialLDLT<SparseMatrix> ldlt(A);
+    CG_VERIFY(ldlt.info() == Eigen::Success, "carry_dirichlet: the least-squares fit failed");
+    bc.values = ldlt.solve(E_FD.transpose() * fine.values + eps * mean);
+    return bc;
 }
 
 HarmonicMap::HarmonicMap(const mesh::Mesh& coarse, const Matrix& H_coarse, const Matrix& points,

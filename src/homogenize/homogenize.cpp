@@ -330,13 +330,19 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
         m.K = fem::stiffness_matrix(c.coarse, mats);
         const SparseMatrix M = fem::mass_matrix(c.coarse, mats, fem::MassType::Lumped);
         m.mass = M.diagonal();
-        m.f = scene::load_vector(scene, c.coarse, mats, mesh::boundary(c.coarse), "coarse mesh");
-        m.bc = scene::dirichlet_conditions(scene, c.coarse, "coarse mesh");
     }
     {
         const Phase phase("maps", &m.timings);
         const mesh::PointLocator locator(c.coarse);
         const std::vector<mesh::Location> loc = locate_points(locator, fine.mesh.rest_positions);
+        SparseMatrix embedding = barycentric_embedding(c.coarse, loc);
+        // The fine conditions and load carried by the coarse-to-fine map P: the coarse DOFs
+        // whose shape functions touch fixed fine DOFs are fixed, and f_c = P^T f is the load
+        // that does the fine load's work on every coarse displacement (exact total force, and
+        // moment for a P that reproduces rigid motions). The shape functions are the linear
+        // ones of the coarse mesh whatever the map: the harmonic map's rows mix all nodes of
+        // the carrying element and would fix interior coarse nodes.
+        m.bc = carry_dirichlet(fine.bc, embedding);
         if (effective && c.options.harmonic_map) {
             std::vector<Index> carrier(loc.size());
             for (std::size_t i = 0; i < loc.size(); ++i) carrier[i] = loc[i].element;
@@ -346,8 +352,10 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
             const HarmonicMap map(c.coarse, neumann ? c.H_neumann : c.H, fine.mesh.rest_positions,
                                   neumann ? c.h_neumann : c.h, carrier);
             m.to_fine = map.linearized();
+            m.f = map.linearized().transpose() * fine.f;
         } else {
-            m.to_fine = barycentric_embedding(c.coarse, loc);
+            m.f = embedding.transpose() * fine.f;
+            m.to_fine = std::move(embedding);
         }
     }
 

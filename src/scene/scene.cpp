@@ -440,11 +440,8 @@ fem::Dirichlet dirichlet_conditions(const Scene& scene, const mesh::Mesh& mesh,
     fem::Dirichlet bc;
     for (const BoxCondition& c : scene.dirichlet) {
         const std::vector<Index> nodes = mesh::nodes_in_box(mesh, c.box.min, c.box.max);
-        CG_VERIFY_AS(InvalidScene, !nodes.empty(),
-                     "{}: {}.box selects no node of the {}{}", scene.source, c.key, what,
-                     what == "mesh" ? ""
-                                    : " (the scene's boxes are applied again to it: widen the "
-                                      "box to hold some of its nodes)");
+        CG_VERIFY_AS(InvalidScene, !nodes.empty(), "{}: {}.box selects no node of the {}",
+                     scene.source, c.key, what);
         bc.fix_nodes(nodes, c.value);
     }
     return bc;
@@ -457,12 +454,8 @@ Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
     if (scene.gravity.squaredNorm() > 0) f += fem::gravity_load(mesh, materials, scene.gravity);
     for (const BoxCondition& c : scene.traction) {
         const std::vector<Index> facets = mesh::facets_in_box(mesh, boundary, c.box.min, c.box.max);
-        CG_VERIFY_AS(InvalidScene, !facets.empty(),
-                     "{}: {}.box selects no boundary {} of the {}{}", scene.source, c.key,
-                     mesh.dim() == 3 ? "face" : "edge", what,
-                     what == "mesh" ? ""
-                                    : " (the scene's boxes are applied again to it: widen the "
-                                      "box to hold whole boundary facets of it)");
+        CG_VERIFY_AS(InvalidScene, !facets.empty(), "{}: {}.box selects no boundary {} of the {}",
+                     scene.source, c.key, mesh.dim() == 3 ? "face" : "edge", what);
         f += fem::traction_load(mesh, boundary, facets, c.value);
     }
     return f;

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/mesh/point_locator.hpp"
 
 namespace coarsegrain::homogenize {
@@ -23,6 +24,19 @@ std::vector<mesh::Location> locate_points(const mesh::PointLocator& coarse_locat
 /// @return (dim * #P) by coarse num_dofs sparse matrix, u_points = E * u_coarse (interleaved)
 SparseMatrix barycentric_embedding(const mesh::Mesh& coarse,
                                    const std::vector<mesh::Location>& locations);
+
+/// The fine Dirichlet conditions carried to the coarse DOFs through a coarse-to-fine map E
+/// (u_fine = E u_coarse, e.g. barycentric_embedding): every coarse DOF whose column of E touches
+/// a fixed fine DOF (an entry above 1e-10 in its row: weights below that are round-off of a fine
+/// node on a coarse facet) is fixed, so that E u_coarse vanishes on the fixed fine DOFs for
+/// homogeneous conditions. The values are zero where the fine ones are all zero; otherwise the
+/// least-squares fit of E u_coarse to the prescribed fine values over the fixed coarse DOFs,
+/// min |E_FD u_D - g_F|^2 + eps |u_D - s_D|^2, with s_D the E-weighted mean of the fine values
+/// each coarse DOF touches and eps = 1e-8 max diag(E_FD^T E_FD): a value the fine ones do not
+/// determine (a coarse DOF that touches fixed fine DOFs only together with others) takes that
+/// mean, and a uniform prescribed displacement is carried exactly.
+/// @throws Error if a fine Dirichlet DOF is out of E's rows
+fem::Dirichlet carry_dirichlet(const fem::Dirichlet& fine, const SparseMatrix& E);
 
 /// The quasi-static harmonic map (Sec. 4.3). For each coarse simplex 𝕋_q with rest corners X^i
 /// and deformed corners x^i, a rotation R and a combination S of the harmonic displacements
