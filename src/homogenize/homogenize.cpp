@@ -336,13 +336,15 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
         const mesh::PointLocator locator(c.coarse);
         const std::vector<mesh::Location> loc = locate_points(locator, fine.mesh.rest_positions);
         SparseMatrix embedding = barycentric_embedding(c.coarse, loc);
-        // The fine conditions and load carried by the coarse-to-fine map P: the coarse DOFs
-        // whose shape functions touch fixed fine DOFs are fixed, and f_c = P^T f is the load
-        // that does the fine load's work on every coarse displacement (exact total force, and
-        // moment for a P that reproduces rigid motions). The shape functions are the linear
-        // ones of the coarse mesh whatever the map: the harmonic map's rows mix all nodes of
-        // the carrying element and would fix interior coarse nodes.
-        m.bc = carry_dirichlet(fine.bc, embedding);
+        // The fine conditions and load carried by the coarse-to-fine map P: P u_coarse takes the
+        // fine Dirichlet values (carry_dirichlet: coarse DOFs fixed, or held in combination where
+        // fixing them would hold more than the fine nodes), and f_c = P^T f is the load that does
+        // the fine load's work on every coarse displacement (exact total force, and moment for a
+        // P that reproduces rigid motions). The conditions follow the linear shape functions of
+        // the coarse mesh whatever the map: the harmonic map's rows mix all nodes of the carrying
+        // element and would hold interior coarse nodes.
+        const CarriedConditions carried = carry_dirichlet(fine.bc, embedding);
+        SparseMatrix P = embedding;
         if (effective && c.options.harmonic_map) {
             std::vector<Index> carrier(loc.size());
             for (std::size_t i = 0; i < loc.size(); ++i) carrier[i] = loc[i].element;
@@ -351,12 +353,24 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
             const bool neumann = !c.fallback.empty();
             const HarmonicMap map(c.coarse, neumann ? c.H_neumann : c.H, fine.mesh.rest_positions,
                                   neumann ? c.h_neumann : c.h, carrier);
-            m.to_fine = map.linearized();
-            m.f = map.linearized().transpose() * fine.f;
-        } else {
-            m.f = embedding.transpose() * fine.f;
-            m.to_fine = std::move(embedding);
+            P = map.linearized();
         }
+        m.f = P.transpose() * fine.f;
+        m.bc = carried.bc;
+        if (carried.constrained > 0) {
+            // Coarse DOFs u = T w: the model's DOFs are w.
+            const SparseMatrix& T = carried.T;
+            const SparseMatrix KT = SparseMatrix(T.transpose()) * m.K * T;
+            m.K = 0.5 * (KT + SparseMatrix(KT.transpose()));
+            m.K.makeCompressed();
+            m.f = T.transpose() * m.f;
+            m.mass = T.transpose().cwiseAbs2() * m.mass;
+            P = P * T;
+        }
+        m.to_fine = std::move(P);
+        m.report["conditions"] = {{"fixed_dofs", carried.fixed},
+                                 {"constrained_dofs", carried.constrained},
+                                 {"combinations", carried.combinations}};
     }
 
     coarsen::VtuOutput model{"coarse_model.vtu", c.coarse, {}};

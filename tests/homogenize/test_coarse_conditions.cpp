@@ -1,6 +1,6 @@
 // The conditions of the effective-tensor and baseline coarse models come from the fine model
-// through the coarse-to-fine map P: the load f_c = P^T f and the Dirichlet DOFs whose coarse shape
-// functions touch fixed fine DOFs (homogenize::carry_dirichlet).
+// through the coarse-to-fine map P: the load f_c = P^T f, and conditions that hold the fixed fine
+// DOFs through the coarse shape functions (homogenize::carry_dirichlet).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -51,18 +51,20 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> resultant(const Matrix& X, const Vec
     return {F, M};
 }
 
-/// The energy error of a coarse model's solution against the fine one.
-double energy_error(const test::Setup& s, const coarsen::CoarseModel& m) {
+/// The errors of a coarse model's solution against the fine one.
+coarsen::Errors coarse_errors(const test::Setup& s, const coarsen::CoarseModel& m) {
     const Vector u = scene::solve_static(s.fine, {}).u;
     const coarsen::CoarseSolution uc = coarsen::solve_coarse(m, {});
-    return coarsen::compare(s.fine, u, uc.u_fine).energy_rel;
+    return coarsen::compare(s.fine, u, uc.u_fine);
 }
 
 // f_c = P^T f does the fine load's work on every coarse displacement; a P that reproduces rigid
 // motions (both maps) therefore carries the fine load's total force and moment exactly, here on a
 // coarse mesh larger than the object (coarse nodes outside, fine nodes inside coarse elements).
 TEST(CoarseConditions, LoadKeepsTotalForceAndMoment) {
-    const test::Setup s = test::setup(clamped_bar({-0.1, -0.1, -0.1}, {3.1, 1.1, 1.1}));
+    json j = clamped_bar({-0.1, -0.1, -0.1}, {3.1, 1.1, 1.1});
+    j.erase("dirichlet");  // the model's DOFs stay the coarse nodes' (CarriedConditions::T = I)
+    const test::Setup s = test::setup(j);
     const auto [F, M] = resultant(s.fine.mesh.rest_positions, s.fine.f);
     for (const std::string map : {"barycentric", "harmonic"}) {
         test::Setup sm = s;
@@ -82,17 +84,39 @@ TEST(CoarseConditions, LoadKeepsTotalForceAndMoment) {
 
 // A coarse mesh that sticks out of the object on every side, also beyond the clamped face and the
 // loaded end, which the scene's boxes no longer select: the model is built from the fine
-// conditions, and its errors are of the size of those of a coarse mesh that fits the object.
+// conditions, holds the fine clamp exactly, and its energy errors are of the size of those of a
+// coarse mesh that fits the object. Measured (fitting / larger): energy 1.45 / 1.27
+// (effective-tensor), 0.72 / 0.86 (voigt), 0.99 / 0.88 (reuss); compliance ratio 0.82 / 0.55,
+// 0.48 / 0.17, 0.80 / 0.27. The larger mesh is stiffer because a linear coarse element across
+// the clamped face may only stretch along its normal (its section in the face is held): the
+// first coarse layer is nearly rigid. Sticking out only sideways and beyond the loaded end, the
+// effective tensors do as well as on the fitting mesh (compliance ratio 0.88, l2 0.15 against
+// 0.18); the averages get stiffer there, as they spread the material over the empty margin.
 TEST(CoarseConditions, CoarseMeshLargerThanTheObjectCoarsens) {
     const test::Setup fit = test::setup(clamped_bar({0, 0, 0}, {3, 1, 1}));
     const test::Setup large = test::setup(clamped_bar({-0.1, -0.1, -0.1}, {3.1, 1.1, 1.1}));
+    const test::Setup side = test::setup(clamped_bar({0, -0.1, -0.1}, {3.1, 1.1, 1.1}));
     for (const std::string method : {"effective-tensor", "voigt", "reuss"}) {
-        const double e_fit =
-            energy_error(fit, homogenize::build_coarse_model(fit.scene, fit.fine, method));
-        const double e_large =
-            energy_error(large, homogenize::build_coarse_model(large.scene, large.fine, method));
-        std::printf("%s: energy error %.4f fitting, %.4f larger coarse mesh\n", method.c_str(),
-                    e_fit, e_large);
+        SCOPED_TRACE(method);
+        const coarsen::Errors fitting =
+            coarse_errors(fit, homogenize::build_coarse_model(fit.scene, fit.fine, method));
+        const coarsen::CoarseModel m =
+            homogenize::build_coarse_model(large.scene, large.fine, method);
+        const coarsen::Errors larger = coarse_errors(large, m);
+        const coarsen::Errors sideways =
+            coarse_errors(side, homogenize::build_coarse_model(side.scene, side.fine, method));
+        std::printf(
+            "%s: energy %.4f / %.4f / %.4f, l2 %.4f / %.4f / %.4f, compliance ratio "
+            "%.4f / %.4f / %.4f (fitting / larger / larger but at the clamp)\n",
+            method.c_str(), fitting.energy_rel, larger.energy_rel, sideways.energy_rel,
+            fitting.l2_rel, larger.l2_rel, sideways.l2_rel, fitting.compliance_ratio,
+            larger.compliance_ratio, sideways.compliance_ratio);
+        EXPECT_LT(larger.energy_rel, 1.5 * fitting.energy_rel);
+        EXPECT_GT(larger.energy_rel, fitting.energy_rel / 1.5);
+        const Vector u_c = coarsen::solve_coarse(m, {}).u_fine;
+        for (const Index dof : large.fine.bc.dofs) EXPECT_NEAR(u_c[dof], 0.0, 1e-12 * u_c.norm());
+        if (method == "effective-tensor")
+            EXPECT_NEAR(sideways.compliance_ratio, fitting.compliance_ratio, 0.1);
     }
 }
 
@@ -113,16 +137,15 @@ TEST(CoarseConditions, ClampOfPerNodeBoxesCoarsens) {
     for (const std::string method : {"effective-tensor", "voigt"}) {
         SCOPED_TRACE(method);
         const coarsen::CoarseModel m = homogenize::build_coarse_model(s.scene, s.fine, method);
-        // Each fine node lies inside a coarse face of x = 0 (3 corners, 2 triangles share the
-        // centre (0.25, 0.25) of a face cell: up to 4 nodes); the nodes of x = 0 only.
-        EXPECT_GE(m.bc.dofs.size(), 9u);
-        EXPECT_LE(m.bc.dofs.size(), 27u);
+        // Each fine node lies inside a coarse face of x = 0, whose corners it touches; more
+        // corners than fine nodes: they are held in combination, not fixed.
+        EXPECT_EQ(m.report["conditions"]["fixed_dofs"].get<int>(), 0);
+        EXPECT_GT(m.report["conditions"]["combinations"].get<int>(), 0);
         const coarsen::CoarseSolution uc = coarsen::solve_coarse(m, {});
         for (std::size_t k = 0; k < s.fine.bc.dofs.size(); ++k)
             EXPECT_NEAR(uc.u_fine[s.fine.bc.dofs[k]], s.fine.bc.values[static_cast<Index>(k)],
                         1e-12);
-        const Vector u = scene::solve_static(s.fine, {}).u;
-        const double e = coarsen::compare(s.fine, u, uc.u_fine).energy_rel;
+        const double e = coarse_errors(s, m).energy_rel;
         std::printf("%s, clamp of 4 nodes: energy error %.4f\n", method.c_str(), e);
         EXPECT_TRUE(std::isfinite(e));
     }

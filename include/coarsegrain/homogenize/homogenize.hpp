@@ -58,7 +58,9 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
 /// anisotropic material per coarse element (fem::stiffness_matrix), lumped mass from the fine
 /// density over the overlaps, to_fine = P, the barycentric embedding of the fine nodes (or the
 /// linearized harmonic map, coarse.map), the fine load carried by it, f = P^T f_fine, and the
-/// fine Dirichlet conditions carried by the barycentric embedding (carry_dirichlet), and
+/// fine Dirichlet conditions carried by the barycentric embedding (carry_dirichlet; where they
+/// hold coarse DOFs only in combination, the model's DOFs are the reduced ones w, u = T w, with
+/// K = T^T K T, f = T^T f, to_fine = P T and mass = diag(T^T M T); report "conditions"), and
 /// the outputs coarse_model.vtu (coarse mesh; cell fields C_voigt_IJ, density, E_x/E_y/E_z
 /// directional Young's moduli, and for the effective-tensor method G_condition, plus fallback
 /// for a mixed boundary) and, for the effective-tensor method, harmonic.vtu (fine mesh; point
