@@ -16,27 +16,24 @@ namespace coarsegrain {
 namespace {
 
 using nlohmann::json;
-using test::box;
-using test::grid;
-using test::iso;
 
 /// A 3 x 1 x 1 bar of spheres (contrast 20) clamped at x = 0, under gravity and a traction on
 /// its end x = 3; the coarse mesh is the box [lo, hi] in 6 x 2 x 2 cells (tets).
 json clamped_bar(const std::vector<double>& lo, const std::vector<double>& hi) {
-    return {
-        {"mesh", grid({0, 0, 0}, {3, 1, 1}, {12, 4, 4}, "tet")},
-        {"material_field",
-         {{"spheres",
-           {{"centres", {{0.5, 0.5, 0.5}, {1.5, 0.4, 0.6}, {2.5, 0.6, 0.4}}},
-            {"radius", 0.3},
-            {"inside", 2},
-            {"outside", 1}}}}},
-        {"materials", {{"1", iso(1.0, 0.3)}, {"2", iso(20.0, 0.3, 2.0)}}},
-        {"dirichlet", json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
-        {"loads",
-         {{"gravity", {0, 0, -0.05}},
-          {"traction", json::array({box({3 - 1e-9, -1, -1}, {3 + 1e-9, 2, 2}, {0, 0.02, -0.1})})}}},
-        {"coarse", {{"mesh", grid(lo, hi, {6, 2, 2}, "tet")}}}};
+    return {{"mesh", test::grid({0, 0, 0}, {3, 1, 1}, {12, 4, 4}, "tet")},
+            {"material_field",
+             {{"spheres",
+               {{"centres", {{0.5, 0.5, 0.5}, {1.5, 0.4, 0.6}, {2.5, 0.6, 0.4}}},
+                {"radius", 0.3},
+                {"inside", 2},
+                {"outside", 1}}}}},
+            {"materials", {{"1", test::iso(1.0, 0.3)}, {"2", test::iso(20.0, 0.3, 2.0)}}},
+            {"dirichlet", json::array({test::box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
+            {"loads",
+             {{"gravity", {0, 0, -0.05}},
+              {"traction",
+               json::array({test::box({3 - 1e-9, -1, -1}, {3 + 1e-9, 2, 2}, {0, 0.02, -0.1})})}}},
+            {"coarse", {{"mesh", test::grid(lo, hi, {6, 2, 2}, "tet")}}}};
 }
 
 /// Sum of the nodal forces and of their moments about the origin (3D), of a load vector on the
@@ -129,8 +126,8 @@ TEST(CoarseConditions, ClampOfPerNodeBoxesCoarsens) {
     json boxes = json::array();
     for (const double y : {0.25, 0.75})
         for (const double z : {0.25, 0.75})
-            boxes.push_back(
-                box({-1e-9, y - 1e-9, z - 1e-9}, {1e-9, y + 1e-9, z + 1e-9}, {0.01, -0.02, 0.005}));
+            boxes.push_back(test::box({-1e-9, y - 1e-9, z - 1e-9}, {1e-9, y + 1e-9, z + 1e-9},
+                                      {0.01, -0.02, 0.005}));
     j["dirichlet"] = boxes;
     const test::Setup s = test::setup(j);
     ASSERT_EQ(s.fine.bc.dofs.size(), 12u);
@@ -155,16 +152,16 @@ TEST(CoarseConditions, ClampOfPerNodeBoxesCoarsens) {
 // same conditions (a nonzero prescribed displacement included), so the fine solution to
 // round-off.
 TEST(CoarseConditions, CoarseMeshEqualToTheFineMeshGivesTheFineSolution) {
-    const json mesh = grid({0, 0, 0}, {3, 1, 1}, {6, 2, 2}, "tet");
+    const json mesh = test::grid({0, 0, 0}, {3, 1, 1}, {6, 2, 2}, "tet");
     const test::Setup s = test::setup(
         {{"mesh", mesh},
-         {"materials", {{"0", iso(50.0, 0.3, 2.0)}}},
-         {"dirichlet",
-          json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2}),
-                       box({3 - 1e-9, -1, 1 - 1e-9}, {3 + 1e-9, 2, 1 + 1e-9}, {0, 0, 0.01})})},
+         {"materials", {{"0", test::iso(50.0, 0.3, 2.0)}}},
+         {"dirichlet", json::array({test::box({-1e-9, -1, -1}, {1e-9, 2, 2}),
+                                    test::box({3 - 1e-9, -1, 1 - 1e-9}, {3 + 1e-9, 2, 1 + 1e-9},
+                                              {0, 0, 0.01})})},
          {"loads",
           {{"gravity", {0, 0, -1}},
-           {"traction", json::array({box({-1, -1, -1e-9}, {4, 2, 1e-9}, {0.1, 0, 0.3})})}}},
+           {"traction", json::array({test::box({-1, -1, -1e-9}, {4, 2, 1e-9}, {0.1, 0, 0.3})})}}},
          {"coarse", {{"mesh", mesh}}}});
     const Vector u = scene::solve_static(s.fine, {}).u;
     for (const std::string method : {"effective-tensor", "naive", "voigt", "reuss"}) {
