@@ -66,6 +66,120 @@ SparseMatrix barycentric_embedding(const mesh::Mesh& coarse,
     return E;
 }
 
+CarriedConditions carry_dirichlet(const fem::Dirichlet& fine, const SparseMatrix& E) {
+    constexpr double kTouch = 1e-10;
+    const Index nc = E.cols();
+    std::vector<Index> row(static_cast<std::size_t>(E.rows()), -1);  // fine DOF -> condition
+    for (std::size_t k = 0; k < fine.dofs.size(); ++k) {
+        const Index d = fine.dofs[k];
+        CG_VERIFY(d >= 0 && d < E.rows(), "carry_dirichlet: fine Dirichlet DOF {} out of 0..{}", d,
+                  E.rows() - 1);
+        row[d] = static_cast<Index>(k);
+    }
+    // D: the coarse DOFs that touch a fixed fine DOF; B = E_FD.
+    std::vector<Index> D, index_in_D(static_cast<std::size_t>(nc), -1);
+    std::vector<Eigen::Triplet<double, Index>> t;
+    for (Index j = 0; j < nc; ++j) {
+        bool touches = false;
+        for (SparseMatrix::InnerIterator it(E, j); it; ++it)
+            touches = touches || (row[it.row()] >= 0 && std::abs(it.value()) > kTouch);
+        if (!touches) continue;
+        index_in_D[j] = static_cast<Index>(D.size());
+        for (SparseMatrix::InnerIterator it(E, j); it; ++it)
+            if (row[it.row()] >= 0) t.emplace_back(row[it.row()], index_in_D[j], it.value());
+        D.push_back(j);
+    }
+    const Index nd = static_cast<Index>(D.size());
+    SparseMatrix B(static_cast<Index>(fine.dofs.size()), nd);
+    B.setFromTriplets(t.begin(), t.end());
+    const SparseMatrix BtB = SparseMatrix(B.transpose()) * B;
+    const Vector Btg = B.transpose() * fine.values;
+    // Blocks of D coupled by a common fixed fine DOF (union-find over BtB's pattern).
+    std::vector<Index> root(static_cast<std::size_t>(nd));
+    for (Index i = 0; i < nd; ++i) root[i] = i;
+    const auto find = [&root](Index i) {
+        while (root[i] != i) i = root[i] = root[root[i]];
+        return i;
+    };
+    for (Index j = 0; j < nd; ++j)
+        for (SparseMatrix::InnerIterator it(BtB, j); it; ++it) root[find(it.row())] = find(j);
+    std::vector<std::vector<Index>> blocks;
+    std::vector<Index> block_of(static_cast<std::size_t>(nd), -1);
+    for (Index i = 0; i < nd; ++i) {
+        Index& b = block_of[find(i)];
+        if (b < 0) {
+            b = static_cast<Index>(blocks.size());
+            blocks.emplace_back();
+        }
+        blocks[b].push_back(i);
+    }
+    // Per block: the least-squares values (pseudo-inverse of B^T B) and the null space of B, the
+    // combinations of its DOFs that E carries to zero on every fixed fine DOF.
+    Vector value = Vector::Zero(nd);
+    std::vector<Matrix> null(blocks.size());
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+        const std::vector<Index>& L = blocks[b];
+        const Index n = static_cast<Index>(L.size());
+        Matrix N(n, n);
+        for (Index i = 0; i < n; ++i)
+            for (Index j = 0; j < n; ++j) N(i, j) = BtB.coeff(L[i], L[j]);
+        const Eigen::SelfAdjointEigenSolver<Matrix> eig(N);
+        const double tol = 1e-10 * eig.eigenvalues()[n - 1];
+        const Index k = (eig.eigenvalues().array() <= tol).count();  // ascending order
+        null[b] = eig.eigenvectors().leftCols(k);
+        Vector rhs(n);
+        for (Index i = 0; i < n; ++i) rhs[i] = Btg[L[i]];
+        const Matrix V = eig.eigenvectors().rightCols(n - k);
+        const Vector u = V * (V.transpose() * rhs).cwiseQuotient(eig.eigenvalues().tail(n - k));
+        for (Index i = 0; i < n; ++i) value[L[i]] = u[i];
+    }
+    // Reduced DOFs: every coarse DOF outside the null-space blocks (the fixed ones held at their
+    // values), then the null-space coordinates, then one DOF held at 1 that carries the values
+    // of the null-space blocks' DOFs if any is nonzero.
+    CarriedConditions out;
+    std::vector<Eigen::Triplet<double, Index>> tt;
+    std::vector<std::pair<Index, double>> fixed;
+    Index w = 0;
+    for (Index j = 0; j < nc; ++j) {
+        const Index i = index_in_D[j];
+        if (i >= 0 && null[block_of[find(i)]].cols() > 0) continue;
+        tt.emplace_back(j, w, 1.0);
+        if (i >= 0) fixed.emplace_back(w, value[i]);
+        ++w;
+    }
+    bool offset = false;
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+        const std::vector<Index>& L = blocks[b];
+        for (Index c = 0; c < null[b].cols(); ++c, ++w) {
+            ++out.combinations;
+            for (std::size_t i = 0; i < L.size(); ++i)
+                if (null[b](static_cast<Index>(i), c) != 0)
+                    tt.emplace_back(D[L[i]], w, null[b](static_cast<Index>(i), c));
+        }
+        if (null[b].cols() > 0) {
+            out.constrained += static_cast<Index>(L.size());
+            for (const Index i : L) offset = offset || value[i] != 0;
+        }
+    }
+    if (offset) {
+        for (std::size_t b = 0; b < blocks.size(); ++b)
+            if (null[b].cols() > 0)
+                for (const Index i : blocks[b]) tt.emplace_back(D[i], w, value[i]);
+        fixed.emplace_back(w++, 1.0);
+    }
+    out.fixed = static_cast<Index>(fixed.size()) - (offset ? 1 : 0);
+    out.bc.dofs.resize(fixed.size());
+    out.bc.values.resize(static_cast<Index>(fixed.size()));
+    for (std::size_t k = 0; k < fixed.size(); ++k) {
+        out.bc.dofs[k] = fixed[k].first;
+        out.bc.values[static_cast<Index>(k)] = fixed[k].second;
+    }
+    out.T.resize(nc, w);
+    out.T.setFromTriplets(tt.begin(), tt.end());
+    out.T.makeCompressed();
+    return out;
+}
+
 HarmonicMap::HarmonicMap(const mesh::Mesh& coarse, const Matrix& H_coarse, const Matrix& points,
                          const Matrix& H_points, std::vector<Index> carrier)
     : m_dim(coarse.dim()),

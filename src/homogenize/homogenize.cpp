@@ -302,9 +302,11 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
 
 namespace {
 
-/// The coarse mass of CoarseMass `type` for the coarse-to-fine map P (CoarseModel::mass).
+/// The coarse mass of CoarseMass `type` for the model's coarse-to-fine map P (CoarseModel::mass).
+/// T (empty: none) maps the model's DOFs w to the coarse mesh's, u = T w, when DOFs are held in
+/// combination; the consistent mass of the coarse mesh is then Tᵀ M_c T.
 std::function<SparseMatrix(const SparseMatrix&)> coarse_mass(
-    CoarseMass type, SparseMatrix P, const mesh::Mesh& coarse,
+    CoarseMass type, SparseMatrix P, const SparseMatrix& T, const mesh::Mesh& coarse,
     const material::ElementMaterials& mats) {
     switch (type) {
         case CoarseMass::Lumped:
@@ -315,9 +317,11 @@ std::function<SparseMatrix(const SparseMatrix&)> coarse_mass(
                 D.diagonal() = m;
                 return D;
             };
-        case CoarseMass::Consistent:
-            return [Mc = fem::mass_matrix(coarse, mats, fem::MassType::Consistent)](
-                       const SparseMatrix&) { return Mc; };
+        case CoarseMass::Consistent: {
+            SparseMatrix Mc = fem::mass_matrix(coarse, mats, fem::MassType::Consistent);
+            if (T.size() > 0) Mc = SparseMatrix(T.transpose()) * Mc * T;
+            return [Mc = std::move(Mc)](const SparseMatrix&) { return Mc; };
+        }
         case CoarseMass::Galerkin:
             return [P = std::move(P)](const SparseMatrix& M) -> SparseMatrix {
                 SparseMatrix Mc = SparseMatrix(P.transpose()) * (M * P);
@@ -358,14 +362,21 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
             mats.index[q] = q;
         }
         m.K = fem::stiffness_matrix(c.coarse, mats);
-        m.f = scene::load_vector(scene, c.coarse, mats, mesh::boundary(c.coarse), "coarse mesh");
-        m.bc = scene::dirichlet_conditions(scene, c.coarse, "coarse mesh");
     }
-    SparseMatrix P;
     {
         const Phase phase("maps", &m.timings);
         const mesh::PointLocator locator(c.coarse);
         const std::vector<mesh::Location> loc = locate_points(locator, fine.mesh.rest_positions);
+        SparseMatrix embedding = barycentric_embedding(c.coarse, loc);
+        // The fine conditions and load carried by the coarse-to-fine map P: P u_coarse takes the
+        // fine Dirichlet values (carry_dirichlet: coarse DOFs fixed, or held in combination where
+        // fixing them would hold more than the fine nodes), and f_c = P^T f is the load that does
+        // the fine load's work on every coarse displacement (exact total force, and moment for a
+        // P that reproduces rigid motions). The conditions follow the linear shape functions of
+        // the coarse mesh whatever the map: the harmonic map's rows mix all nodes of the carrying
+        // element and would hold interior coarse nodes.
+        const CarriedConditions carried = carry_dirichlet(fine.bc, embedding);
+        SparseMatrix P = embedding;
         if (effective && c.options.harmonic_map) {
             std::vector<Index> carrier(loc.size());
             for (std::size_t i = 0; i < loc.size(); ++i) carrier[i] = loc[i].element;
@@ -375,12 +386,25 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
             const HarmonicMap map(c.coarse, neumann ? c.H_neumann : c.H, fine.mesh.rest_positions,
                                   neumann ? c.h_neumann : c.h, carrier);
             P = map.linearized();
-        } else {
-            P = barycentric_embedding(c.coarse, loc);
+        }
+        m.f = P.transpose() * fine.f;
+        m.bc = carried.bc;
+        if (carried.constrained > 0) {
+            // Coarse DOFs u = T w: the model's DOFs are w.
+            const SparseMatrix& T = carried.T;
+            const SparseMatrix KT = SparseMatrix(T.transpose()) * m.K * T;
+            m.K = 0.5 * (KT + SparseMatrix(KT.transpose()));
+            m.K.makeCompressed();
+            m.f = T.transpose() * m.f;
+            P = P * T;
         }
         m.to_fine = P;
+        m.report["conditions"] = {{"fixed_dofs", carried.fixed},
+                                  {"constrained_dofs", carried.constrained},
+                                  {"combinations", carried.combinations}};
+        m.mass = coarse_mass(c.options.mass, std::move(P),
+                             carried.constrained > 0 ? carried.T : SparseMatrix(), c.coarse, mats);
     }
-    m.mass = coarse_mass(c.options.mass, std::move(P), c.coarse, mats);
 
     coarsen::VtuOutput model{"coarse_model.vtu", c.coarse, {}};
     io::add_element_material_fields(model.fields, mats);

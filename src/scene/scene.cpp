@@ -452,11 +452,8 @@ fem::Dirichlet dirichlet_conditions(const Scene& scene, const mesh::Mesh& mesh,
     fem::Dirichlet bc;
     for (const BoxCondition& c : scene.dirichlet) {
         const std::vector<Index> nodes = mesh::nodes_in_box(mesh, c.box.min, c.box.max);
-        CG_VERIFY_AS(InvalidScene, !nodes.empty(), "{}: {}.box selects no node of the {}{}",
-                     scene.source, c.key, what,
-                     what == "mesh" ? ""
-                                    : " (the scene's boxes are applied again to it: widen the "
-                                      "box to hold some of its nodes)");
+        CG_VERIFY_AS(InvalidScene, !nodes.empty(), "{}: {}.box selects no node of the {}",
+                     scene.source, c.key, what);
         bc.fix_nodes(nodes, c.value);
     }
     return bc;
@@ -469,11 +466,8 @@ Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
     if (scene.gravity.squaredNorm() > 0) f += fem::gravity_load(mesh, materials, scene.gravity);
     for (const BoxCondition& c : scene.traction) {
         const std::vector<Index> facets = mesh::facets_in_box(mesh, boundary, c.box.min, c.box.max);
-        CG_VERIFY_AS(InvalidScene, !facets.empty(), "{}: {}.box selects no boundary {} of the {}{}",
-                     scene.source, c.key, mesh.dim() == 3 ? "face" : "edge", what,
-                     what == "mesh" ? ""
-                                    : " (the scene's boxes are applied again to it: widen the "
-                                      "box to hold whole boundary facets of it)");
+        CG_VERIFY_AS(InvalidScene, !facets.empty(), "{}: {}.box selects no boundary {} of the {}",
+                     scene.source, c.key, mesh.dim() == 3 ? "face" : "edge", what);
         f += fem::traction_load(mesh, boundary, facets, c.value);
     }
     return f;
@@ -524,41 +518,90 @@ std::vector<Index> mesh_parts(const mesh::Mesh& m, Index& parts) {
     return part;
 }
 
-/// Why the fine stiffness with its Dirichlet conditions is singular, for the error message: a
-/// connected part of the mesh without any Dirichlet DOF moves freely; if every part has some,
-/// the likely cause is round-off at the materials' stiffness contrast (or a part held at too
-/// few nodes to stop its rotations).
-std::string singular_cause(const FineModel& model) {
-    const mesh::Mesh& m = model.mesh;
-    Index parts = 0;
-    const std::vector<Index> part = mesh_parts(m, parts);
-    std::vector<char> held(static_cast<std::size_t>(parts), 0);
-    for (const Index dof : model.bc.dofs)
-        held[static_cast<std::size_t>(part[static_cast<std::size_t>(dof / m.dim())])] = 1;
-    for (Index p = 0; p < parts; ++p) {
-        if (held[static_cast<std::size_t>(p)]) continue;
-        Index nodes = 0;
-        Eigen::VectorXd sum = Eigen::VectorXd::Zero(m.dim());
-        for (Index v = 0; v < m.num_nodes(); ++v)
-            if (part[static_cast<std::size_t>(v)] == p) {
-                ++nodes;
-                sum += m.rest_positions.row(v).transpose();
-            }
-        return fmt::format(
-            "part {} of the mesh's {} connected parts ({} nodes, centred at ({:.4g})) has no "
-            "Dirichlet node and can move freely; add a dirichlet box that touches it",
-            p + 1, parts, nodes, fmt::join(sum / static_cast<double>(nodes), ", "));
-    }
+/// The stiffness contrast of the fine materials: their Young's moduli's span (for anisotropic
+/// materials the mean axis modulus, Material::E).
+std::pair<double, double> modulus_range(const material::ElementMaterials& materials) {
     double e_min = std::numeric_limits<double>::infinity(), e_max = 0;
-    for (const material::Material& mat : model.materials.table) {
+    for (const material::Material& mat : materials.table) {
         e_min = std::min(e_min, mat.E);
         e_max = std::max(e_max, mat.E);
     }
+    return {e_min, e_max};
+}
+
+/// Why the fine stiffness with its Dirichlet conditions is singular, for the error message: a
+/// connected part of the mesh without any Dirichlet DOF moves freely, one whose fixed DOFs do not
+/// stop all its rigid motions (fixed nodes on one line in 3D) turns; if every part is held against
+/// every rigid motion, the conditions are not to blame and K is singular to round-off, which the
+/// materials' stiffness contrast explains. `held` tells whether every part was held.
+std::string singular_cause(const FineModel& model, bool& held) {
+    const mesh::Mesh& m = model.mesh;
+    const int dim = m.dim(), r = dim == 2 ? 3 : 6;
+    Index parts = 0;
+    const std::vector<Index> part = mesh_parts(m, parts);
+    const auto P = [](Index i) { return static_cast<std::size_t>(i); };
+    std::vector<Index> nodes(P(parts), 0);
+    Matrix centre = Matrix::Zero(parts, dim);
+    Vector radius = Vector::Zero(parts);
+    for (Index v = 0; v < m.num_nodes(); ++v) {
+        ++nodes[P(part[P(v)])];
+        centre.row(part[P(v)]) += m.rest_positions.row(v);
+    }
+    for (Index p = 0; p < parts; ++p) centre.row(p) /= static_cast<double>(nodes[P(p)]);
+    for (Index v = 0; v < m.num_nodes(); ++v)
+        radius[part[P(v)]] =
+            std::max(radius[part[P(v)]], (m.rest_positions.row(v) - centre.row(part[P(v)])).norm());
+    // Gram matrix of the rigid motions (translations, rotations about the part's centre scaled by
+    // its radius) over each part's fixed DOFs: full rank if and only if they stop them all.
+    std::vector<Matrix> gram(P(parts), Matrix::Zero(r, r));
+    std::vector<Index> fixed(P(parts), 0);
+    for (const Index dof : model.bc.dofs) {
+        const Index v = dof / dim, p = part[P(v)];
+        const int c = static_cast<int>(dof % dim);
+        const Eigen::VectorXd x =
+            (m.rest_positions.row(v) - centre.row(p)).transpose() / std::max(radius[p], 1e-300);
+        Eigen::VectorXd row = Eigen::VectorXd::Zero(r);
+        row[c] = 1;  // translation along c
+        if (dim == 2) {
+            row[2] = c == 0 ? -x[1] : x[0];
+        } else {
+            for (int k = 0; k < 3; ++k)  // component c of e_k × x
+                row[3 + k] = Eigen::Vector3d::Unit(k).cross(Eigen::Vector3d(x))[c];
+        }
+        gram[P(p)] += row * row.transpose();
+        ++fixed[P(p)];
+    }
+    held = false;
+    const auto where = [&](Index p) {
+        return fmt::format(
+            "part {} of the mesh's {} connected parts ({} nodes, centred at ({:.4g}))", p + 1,
+            parts, nodes[P(p)], fmt::join(centre.row(p), ", "));
+    };
+    for (Index p = 0; p < parts; ++p)
+        if (fixed[P(p)] == 0)
+            return fmt::format(
+                "{} has no Dirichlet node and can move freely; add a dirichlet box "
+                "that touches it",
+                where(p));
+    for (Index p = 0; p < parts; ++p) {
+        const Eigen::SelfAdjointEigenSolver<Matrix> eig(gram[P(p)]);
+        if (eig.eigenvalues()[0] < 1e-10 * eig.eigenvalues()[r - 1])
+            return fmt::format(
+                "{} has {} fixed DOFs, which do not stop all its rigid motions "
+                "(fixed nodes on one line can turn about it); fix nodes off that "
+                "line",
+                where(p), fixed[P(p)]);
+    }
+    held = true;
+    const auto [e_min, e_max] = modulus_range(model.materials);
     return fmt::format(
-        "every connected part of the mesh ({}) has Dirichlet nodes, so either a part is held at "
-        "too few nodes to stop its rotations, or K is singular to round-off: the materials' "
-        "Young's moduli span a contrast of {:.3g} ({:.3g} to {:.3g}); above about 1e10 the "
-        "factorization cannot tell the soft material from a free one",
+        "every connected part of the mesh ({}) is held against all its rigid motions, so the "
+        "Dirichlet conditions are not missing: K is numerically singular at the materials' "
+        "stiffness contrast of {:.3g} (Young's moduli {:.3g} to {:.3g}): at such a ratio "
+        "neither a factorization (cholmod, ldlt) nor conjugate gradients can tell the soft "
+        "material from a free one in double precision (a 16x16 checkerboard clamped at one edge "
+        "solves up to 1e12 and fails from 1e13); lower the contrast (e.g. model the soft "
+        "material as a cavity, or raise its modulus)",
         parts, e_max / e_min, e_min, e_max);
 }
 
@@ -572,8 +615,21 @@ StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& 
     try {
         s.u = fem::solve_static(model.K, model.f, model.bc, node_options, timings);
     } catch (const NotPositiveDefinite& e) {
-        throw NotPositiveDefinite(fmt::format("{}: the fine model is singular: {} ({})",
-                                              model.source, singular_cause(model), e.what()));
+        bool held = false;
+        const std::string cause = singular_cause(model, held);
+        throw NotPositiveDefinite(
+            fmt::format("{}: the fine model is singular: {} ({})", model.source, cause,
+                        held ? solve::without_singular_hint(e.what()) : std::string(e.what())));
+    } catch (const solve::NotConverged& e) {
+        // Conjugate gradients: a singular K (missing conditions) or one too ill-conditioned.
+        bool held = false;
+        const std::string cause = singular_cause(model, held);
+        const auto [e_min, e_max] = modulus_range(model.materials);
+        if (!held || e_max / e_min >= 1e10)
+            throw NotPositiveDefinite(fmt::format("{}: the fine model is singular: {} ({})",
+                                                  model.source, cause,
+                                                  solve::without_singular_hint(e.what())));
+        throw;
     }
     s.strain_energy = fem::strain_energy(model.K, s.u);
     return s;

@@ -297,11 +297,19 @@ TEST(CliCoarsen, EffectiveTensorWritesItsPhasesAndFiles) {
 
 // The coarse model file is a mesh with one tensor and density per element: `coarsegrain solve`
 // on a scene whose mesh is coarse_model.vtu (same boxes and loads, no fine mesh) reproduces the
-// coarse solve of `coarsen`. The probes lie on fine nodes, where the barycentric embedding is
-// the coarse interpolant itself, so they agree too.
+// coarse solve of `coarsen` up to the load: the coarse model carries the fine load, P^T f, the
+// file's scene applies gravity and traction to the coarse mesh again. The two agree where the
+// density is constant in each coarse element (one density here) and the coarse tets' faces cut
+// no fine element; here the tets' diagonal faces cut fine hexes. The probes lie on fine nodes,
+// where the barycentric embedding is the coarse interpolant itself.
 TEST(CliCoarsen, CoarseModelFileIsSolvedWithoutTheFineMesh) {
     const std::string dir = temp_dir("cli_coarsen_reload");
-    const json c = run_method("effective-tensor", dir);
+    json scene = coarse_scene();
+    scene["materials"]["2"]["density"] = 1;
+    const Result run = cli("coarsen " + write_scene(dir, scene) +
+                           " --method effective-tensor --out " + dir + "/out");
+    ASSERT_EQ(run.code, 0) << run.output;
+    const json c = read_json(dir + "/out/summary.json");
     json j = small_scene();
     j.erase("material_field");
     j.erase("materials");
@@ -311,15 +319,16 @@ TEST(CliCoarsen, CoarseModelFileIsSolvedWithoutTheFineMesh) {
     ASSERT_EQ(r.code, 0) << r.output;
     const json s = read_json(dir + "/solve/summary.json");
     EXPECT_EQ(s["fine"]["elements"], c["coarse"]["elements"]);
-    // 1e-10: the same K and f up to the Voigt round trip of the tensors (round-off) and the
-    // same direct solve.
+    // The same K up to the Voigt round trip of the tensors (round-off); the loads differ in the
+    // cut fine hexes: measured 5.5e-4 in compliance, 4.2e-4 of the largest displacement at the
+    // probes.
     const double compliance = c["compliance"].get<double>();
-    EXPECT_NEAR(s["compliance"].get<double>(), compliance, 1e-10 * std::abs(compliance));
+    EXPECT_NEAR(s["compliance"].get<double>(), compliance, 2e-3 * std::abs(compliance));
     for (std::size_t p = 0; p < 2; ++p)
         for (std::size_t k = 0; k < 3; ++k) {
             const double u = c["probes"][p]["u"][k].get<double>();
             EXPECT_NEAR(s["probes"][p]["u"][k].get<double>(), u,
-                        1e-10 * c["max_displacement"].get<double>())
+                        2e-3 * c["max_displacement"].get<double>())
                 << "probe " << p << " component " << k;
         }
 }

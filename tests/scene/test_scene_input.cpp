@@ -177,6 +177,47 @@ TEST(SceneInput, SingularModelsNameTheirCause) {
     test::expect_error([&] { scene::solve_static(scene::build_fine_model(free), {}); },
                        "two.json: the fine model is singular: part 2 of the mesh's 2 connected "
                        "parts (8 nodes, centred at (3.5, 0.5, 0.5)) has no Dirichlet node");
+    // Both blocks held, the second at the two nodes of one edge: it turns about that edge.
+    j["dirichlet"].push_back({{"box", {{"min", {2.5, -1, -1}}, {"max", {4.5, 0.5, 0.5}}}}});
+    const scene::Scene hinged = scene::parse_scene(j, "two.json", dir);
+    test::expect_error([&] { scene::solve_static(scene::build_fine_model(hinged), {}); },
+                       "two.json: the fine model is singular: part 2 of the mesh's 2 connected "
+                       "parts (8 nodes, centred at (3.5, 0.5, 0.5)) has 6 fixed DOFs, which do "
+                       "not stop all its rigid motions");
+}
+
+// A body held against every rigid motion whose materials span a contrast of 1e15: the message
+// blames the contrast (and gives it), not the Dirichlet conditions, for the factorization and
+// for conjugate gradients, and does not advise another solver.
+TEST(SceneInput, SingularAtExtremeContrastBlamesTheContrast) {
+    json j = {
+        {"dimension", 2},
+        {"mesh",
+         {{"grid", {{"min", {0, 0}}, {"max", {1, 1}}, {"cells", {16, 16}}, {"element", "quad"}}}}},
+        {"material_field", {{"checkerboard", {{"size", 0.25}, {"ids", {1, 2}}}}}},
+        {"materials",
+         {{"1", {{"E", 1e-6}, {"nu", 0.3}, {"density", 1}}},
+          {"2", {{"E", 1e9}, {"nu", 0.3}, {"density", 1}}}}},
+        {"dirichlet", {{{"box", {{"min", {-1, 0.999}}, {"max", {2, 2}}}}}}},
+        {"loads", {{"gravity", {0, -1}}}}};
+    for (const std::string backend : {"cholmod", "cg"}) {
+        j["solver"] = {{"backend", backend}};
+        const scene::Scene sc = scene::parse_scene(j, "checker.json", "");
+        try {
+            scene::solve_static(scene::build_fine_model(sc), sc.solver);
+            ADD_FAILURE() << backend << ": expected an error";
+        } catch (const NotPositiveDefinite& e) {
+            const std::string what = e.what();
+            EXPECT_THAT(what, ::testing::HasSubstr(
+                                  "is held against all its rigid motions, so the Dirichlet "
+                                  "conditions are not missing: K is numerically singular at the "
+                                  "materials' stiffness contrast of 1e+15 (Young's moduli 1e-06 "
+                                  "to 1e+09)"))
+                << backend;
+            EXPECT_THAT(what, ::testing::Not(::testing::HasSubstr("enough Dirichlet"))) << what;
+            EXPECT_THAT(what, ::testing::Not(::testing::HasSubstr("use cholmod"))) << what;
+        }
+    }
 }
 
 std::vector<std::uint8_t> file_bytes(const fs::path& file) {

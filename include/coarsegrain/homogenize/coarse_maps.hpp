@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/mesh/point_locator.hpp"
 
 namespace coarsegrain::homogenize {
@@ -23,6 +24,29 @@ std::vector<mesh::Location> locate_points(const mesh::PointLocator& coarse_locat
 /// @return (dim * #P) by coarse num_dofs sparse matrix, u_points = E * u_coarse (interleaved)
 SparseMatrix barycentric_embedding(const mesh::Mesh& coarse,
                                    const std::vector<mesh::Location>& locations);
+
+/// Fine Dirichlet conditions carried to a coarse model: its DOFs become w with u_coarse = T w.
+struct CarriedConditions {
+    SparseMatrix T;     ///< coarse DOFs by reduced DOFs (the identity where no constraint couples)
+    fem::Dirichlet bc;  ///< conditions on the reduced DOFs
+    Index fixed = 0;    ///< coarse DOFs held at a value
+    Index constrained = 0;   ///< coarse DOFs held only in combination (multi-point constraints)
+    Index combinations = 0;  ///< the free combinations of those (reduced DOFs that replace them)
+};
+
+/// The fine Dirichlet conditions carried to the coarse DOFs through a coarse-to-fine map E
+/// (u_fine = E u_coarse, e.g. barycentric_embedding): E u_coarse must take the prescribed fine
+/// values g on the fixed fine DOFs F. The coarse DOFs that touch them (an entry of E above 1e-10
+/// in their rows: smaller weights are round-off of a fine node on a coarse facet) fall into
+/// blocks coupled by common fixed fine DOFs. A block whose columns of E_F are independent is
+/// fixed: each DOF at its least-squares value (E_FD^T E_FD)^-1 E_FD^T g, zero for zero values
+/// (a coarse mesh whose nodes lie on the clamped face). Otherwise (a coarse mesh sticking out
+/// beyond the clamped face, a clamp inside coarse elements) only the combinations in the null
+/// space of E_FD stay free: the block's DOFs are replaced by coordinates in that null space plus
+/// the minimum-norm least-squares values (carried by one extra DOF held at 1), so that the fine
+/// nodes are held without fixing whole coarse elements.
+/// @throws Error if a fine Dirichlet DOF is out of E's rows
+CarriedConditions carry_dirichlet(const fem::Dirichlet& fine, const SparseMatrix& E);
 
 /// The quasi-static harmonic map (Sec. 4.3). For each coarse simplex 𝕋_q with rest corners X^i
 /// and deformed corners x^i, a rotation R and a combination S of the harmonic displacements

@@ -56,15 +56,16 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
 
 /// The coarse model of a method (the CLI's `coarsen` calls this): coarse stiffness from one
 /// anisotropic material per coarse element (fem::stiffness_matrix), lumped mass from the fine
-/// density over the overlaps, load f = gravity on that mass + the scene's traction boxes on the
-/// coarse boundary, Dirichlet conditions from the scene's boxes on the coarse nodes, to_fine =
-/// barycentric embedding of the fine nodes (or the linearized harmonic map, coarse.map), and
+/// density over the overlaps, to_fine = P, the barycentric embedding of the fine nodes (or the
+/// linearized harmonic map, coarse.map), the fine load carried by it, f = P^T f_fine, and the
+/// fine Dirichlet conditions carried by the barycentric embedding (carry_dirichlet; where they
+/// hold coarse DOFs only in combination, the model's DOFs are the reduced ones w, u = T w, with
+/// K = T^T K T, f = T^T f, to_fine = P T and mass = diag(T^T M T); report "conditions"), and
 /// the outputs coarse_model.vtu (coarse mesh; cell fields C_voigt_IJ, density, E_x/E_y/E_z
 /// directional Young's moduli, and for the effective-tensor method G_condition, plus fallback
 /// for a mixed boundary) and, for the effective-tensor method, harmonic.vtu (fine mesh; point
 /// fields h_xx, h_yy, ...). Timings: "intersect", "harmonic", "tensors", "assemble", "maps".
-/// @throws InvalidScene if a dirichlet box selects no coarse node or a traction box no coarse
-///         boundary facet; everything coarsening throws
+/// @throws everything coarsening throws
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
                                         const std::string& method);
 

@@ -143,7 +143,10 @@ struct StaticSolution {
 
 /// Solves K u = f with the Dirichlet conditions eliminated. Phases "factorize" and "solve".
 /// @throws NotPositiveDefinite naming the source and the cause: a connected part of the mesh
-///         without a Dirichlet node (its size and centre), or else the materials' contrast
+///         without a Dirichlet node (its size and centre), one whose fixed DOFs do not stop its
+///         rigid motions, or else (every part held) the materials' stiffness contrast, at which
+///         K is numerically singular; also for conjugate gradients that do not converge for one
+///         of these causes (contrast from 1e10) -- otherwise their NotConverged
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
                             Timings* timings = nullptr);
 

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/types.hpp"
 
 namespace coarsegrain::solve {
@@ -16,6 +17,17 @@ enum class Backend {
 
 /// "cholmod", "ldlt", "cg".
 std::string backend_name(Backend b);
+
+/// Conjugate gradients did not converge (the matrix may be singular or too ill-conditioned).
+class NotConverged : public Error {
+  public:
+    using Error::Error;
+};
+
+/// A solver's NotPositiveDefinite or NotConverged message without its guess at the cause (too
+/// few Dirichlet conditions; for cg also the advice to use cholmod), for a caller that has
+/// established the cause itself.
+std::string without_singular_hint(std::string message);
 /// Parses backend_name's strings. @throws Error listing the valid names
 Backend parse_backend(const std::string& name);
 
