@@ -9,6 +9,7 @@
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/io/file_util.hpp"
+#include "method_json.hpp"
 #include "output.hpp"
 #include "plots.hpp"
 #include "report.hpp"
@@ -85,7 +86,7 @@ nlohmann::json write_solution(const fs::path& dir, const std::string& name, cons
 }
 
 // The method's figures and files that need the fine solution (CoarseModel::compare_with_fine):
-// its report's keys replace those of `coarse_json`, its files and tables (as CSV) are written to
+// its report goes into `coarse_json` (add_comparison_json), its files and tables (as CSV) to
 // `dir`, and the tables' plots are made last. Returns the plot images
 // made. The phase "compare" goes to `timings`.
 nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene::Scene& sc,
@@ -95,7 +96,7 @@ nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene
     if (!coarse.compare_with_fine) return made;
     const Phase phase("compare", &timings);
     const coarsen::FineComparison c = coarse.compare_with_fine(sc, fine, u);
-    coarse_json.update(c.report);
+    add_comparison_json(coarse_json, coarse.report, c.report);
     for (const coarsen::Reconstruction& r : c.reconstructions)
         coarse_json.at("levels").at(r.level).update(write_solution(dir, r.name, sc, fine, u, r.u));
     for (const coarsen::VtuOutput& o : c.outputs)
@@ -136,7 +137,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         for (const coarsen::VtuOutput& o : coarse.outputs)
             io::write_vtu((dir / o.file).string(), o.mesh, o.fields);
     }
-    nlohmann::json coarse_json = coarse.report;
+    nlohmann::json coarse_json = method_json(coarse.report);
     const nlohmann::json plots = compare_with_fine(coarse, sc, fine, u, dir, coarse_json, tc);
     r.dofs = coarse.K.rows();
     r.build_seconds = sum(coarse.timings);

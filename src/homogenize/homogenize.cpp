@@ -215,18 +215,19 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
         c.element_mass =
             coarse_element_masses(c.fine_materials, c.overlaps, c.coarse.num_elements());
     }
-    c.report["fine_simplices"] = c.fine.num_elements();
-    c.report["coarse_simplices"] = c.coarse.num_elements();
-    c.report["overlaps"] = c.overlaps.size();
+    c.report.fine_simplices = c.fine.num_elements();
+    c.report.coarse_simplices = c.coarse.num_elements();
+    c.report.overlaps = static_cast<Index>(c.overlaps.size());
     // Nodes on the fine boundary are reconstructed from barycentric weights to round-off of the
     // coordinates' size: only distances above that count as outside.
     const double round_off = 1e-12 * box_diagonal(c.fine);
-    c.report["coarse_nodes_outside"] = (outside.array() > round_off).count();
-    c.report["coarse_nodes_max_outside_distance"] = outside.size() ? outside.maxCoeff() : 0.0;
+    c.report.coarse_nodes_outside = (outside.array() > round_off).count();
+    c.report.coarse_nodes_max_outside_distance = outside.size() ? outside.maxCoeff() : 0.0;
     double fine_mass = 0;
     for (Index p = 0; p < c.fine.num_elements(); ++p)
         fine_mass += c.fine_materials.of(p).density * mesh::element_measure(c.fine, p);
-    c.report["mass"] = {{"fine", fine_mass}, {"coarse", c.element_mass.sum()}};
+    c.report.fine_mass = fine_mass;
+    c.report.coarse_mass = c.element_mass.sum();
 
     if (!effective) {
         const Phase phase("tensors", &c.timings);
@@ -234,7 +235,6 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
                              : method == "voigt" ? Average::Voigt
                                                  : Average::Reuss;
         c.C = average_tensors(kind, c.fine_materials, c.overlaps, c.coarse.num_elements());
-        c.report["map"] = "barycentric";
         return c;
     }
 
@@ -292,11 +292,9 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
         cmin = std::min(cmin, k);
         cmax = std::max(cmax, k);
     }
-    c.report["normals"] = c.options.coarse_normals ? "coarse" : "fine";
-    c.report["boundary"] = c.options.mixed_boundary ? "mixed" : "neumann";
-    c.report["map"] = c.options.harmonic_map ? "harmonic" : "barycentric";
-    c.report["mollifier_condition"] = {{"min", cmin}, {"max", cmax}};
-    if (c.options.mixed_boundary) c.report["fallback_elements"] = c.fallback;
+    c.report.harmonic_map = c.options.harmonic_map;
+    c.report.effective_tensor = EffectiveTensorReport{
+        c.options.coarse_normals, c.options.mixed_boundary, cmin, cmax, c.fallback};
     return c;
 }
 

@@ -208,32 +208,4 @@ io::Table levels_table(const Diagnostics& d) {
     return t;
 }
 
-nlohmann::json to_json(const LevelDiagnostics& L) {
-    const auto number = [](double v) {
-        return std::isnan(v) ? nlohmann::json() : nlohmann::json(v);
-    };
-    return {{"level", L.k},
-            {"dofs", L.dofs},
-            {"wavelets", L.wavelets},
-            {"error_over_g", number(L.error_over_g)},
-            {"error_over_u", number(L.error_over_u)},
-            {"lambda_min_A", number(L.lambda_min_A)},
-            {"lambda_max_A", number(L.lambda_max_A)},
-            {"cond_A", number(L.cond_A)},
-            {"lambda_min_B", number(L.lambda_min_B)},
-            {"lambda_max_B", number(L.lambda_max_B)},
-            {"cond_B", number(L.cond_B)},
-            {"sparsity_A", number(L.sparsity_A)},
-            {"sparsity_B", number(L.sparsity_B)},
-            {"sparsity_C", number(L.sparsity_C)},
-            {"bytes_Phi", L.bytes_Phi},
-            {"bytes_Psi", L.bytes_Psi},
-            {"bytes_C", L.bytes_C},
-            {"bytes_A", L.bytes_A},
-            {"bytes_B", L.bytes_B},
-            {"build_seconds", L.build_seconds},
-            {"spectrum_skipped", L.spectrum_skipped},
-            {"spectrum_note", L.spectrum_note}};
-}
-
 }  // namespace coarsegrain::mra

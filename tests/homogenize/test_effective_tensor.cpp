@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <variant>
 
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/homogenize/homogenize.hpp"
@@ -96,7 +97,7 @@ TEST_P(EffectiveTensorDim, Eq5HoldsAndTensorsAreSymmetricPositiveDefinite) {
     const int dim = GetParam();
     const test::Setup s = test::setup(spheres_scene(dim));
     const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
-    EXPECT_GT(c.report["coarse_nodes_outside"].get<int>(), 0);  // extrapolation is exercised
+    EXPECT_GT(c.report.coarse_nodes_outside, 0);  // extrapolation is exercised
     // 1e-10: two 6x6 products and an inverse of a matrix with condition number < 1e3.
     EXPECT_LT(eq5_defect(c), 1e-10);
     const auto [min_ratio, asym] = spd_figures(c);
@@ -234,7 +235,7 @@ TEST_P(EffectiveTensorDim, CoarseMassHasTheFineMassAndMoments) {
                 EXPECT_NEAR(coarse_moment, fine_moment, 1e-12 * fine_mass) << type;
             }
         }
-        EXPECT_NEAR(m.report["mass"]["coarse"].get<double>(), total_mass(M, dim),
+        EXPECT_NEAR(std::get<homogenize::Report>(m.report).coarse_mass, total_mass(M, dim),
                     1e-12 * total_mass(M, dim));
     }
 }
@@ -370,7 +371,8 @@ TEST(EffectiveTensor, MixedBoundaryFallsBackWhereTheClampPinsAnEdge) {
         if (clamped >= 2) pinned.push_back(q);
     }
     EXPECT_EQ(c.fallback, pinned);
-    EXPECT_EQ(c.report["fallback_elements"].get<std::vector<Index>>(), pinned);
+    ASSERT_TRUE(c.report.effective_tensor.has_value());
+    EXPECT_EQ(c.report.effective_tensor->fallback_elements, pinned);
     EXPECT_LT(eq5_defect(c), 1e-10);
     EXPECT_GT(spd_figures(c).first, 0.0);
     // The harmonic coarse-to-fine map (built from the pure-Neumann fields, since elements fell

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "coarsegrain/fem/dirichlet.hpp"
@@ -47,9 +48,10 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         // Dirac: the three top coarse nodes sit on the clamped edge and have no basis function
         // (constrain = eliminate for Dirac); linear keeps them.
         EXPECT_EQ(m.bc.dofs.size(), std::string(refinement) == "dirac" ? 6u : 0u);
-        EXPECT_EQ(m.report["levels"].size(), 2u);
-        EXPECT_EQ(m.report["options"]["dirichlet"], "constrain");
-        EXPECT_EQ(m.report["options"]["patch_clip"], false);
+        const auto& report = std::get<mra::HierarchyReport>(m.report);
+        EXPECT_EQ(report.levels.size(), 2u);
+        EXPECT_EQ(report.options.dirichlet, mra::DirichletTreatment::Constrain);
+        EXPECT_FALSE(report.options.patch_clip);
         // The build phases are reported per level (their durations are not checked).
         std::vector<std::string> phases;
         for (const auto& entry : m.timings.entries()) phases.push_back(entry.first);

@@ -8,13 +8,13 @@
 /// fine mollifiers G_p (Sec. 3.5), the coarse-sampled fields ℍ (Sec. 3.2) and the coarse
 /// mollifiers 𝔾_q follow, and Eq. 8 gives one anisotropic tensor per coarse element. The
 /// baselines replace the last three steps by averages over the same overlaps.
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "coarsegrain/coarsen/coarse_model.hpp"
 #include "coarsegrain/homogenize/effective_tensor.hpp"
 #include "coarsegrain/homogenize/options.hpp"
+#include "coarsegrain/homogenize/report.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
 namespace coarsegrain::homogenize {
@@ -42,7 +42,7 @@ struct Coarsening {
     Matrix h_neumann, H_neumann;
     std::vector<Mandel6> G_fine_neumann;
     Timings timings;  ///< phases "intersect", "harmonic", "tensors"
-    nlohmann::json report = nlohmann::json::object();
+    Report report;
 };
 
 /// Runs a coarsening method on the scene's coarse mesh.

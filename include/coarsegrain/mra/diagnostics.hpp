@@ -4,7 +4,6 @@
 /// numbers of A^k and B^k (Figs. 7 and 8), sparsity and storage (Table 1), build time.
 #include <cstddef>
 #include <limits>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -84,9 +83,5 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
 /// The table "mra_levels": one row per level, columns as the LevelDiagnostics fields in their
 /// order (spectrum_skipped last, as 0 / 1; NaN where a level has no such figure).
 io::Table levels_table(const Diagnostics& d);
-
-/// The fields of one level as a JSON object (keys as the CSV columns plus spectrum_note; NaN
-/// becomes null).
-nlohmann::json to_json(const LevelDiagnostics& L);
 
 }  // namespace coarsegrain::mra
