@@ -229,12 +229,16 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
 }
 
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
-                                       const Vector& u, const CompareOptions& options) {
+                                       const scene::StaticSolution& u,
+                                       const CompareOptions& options) {
     const int q = h.num_levels();
     DiagnoseOptions diagnose_options{options.max_spectrum_dofs, true};
     const bool penalized = h.options.dirichlet == DirichletTreatment::Penalty ||
                            h.options.dirichlet == DirichletTreatment::DiagonalPenalty;
-    if (!penalized) diagnose_options.fine_solution = &u;  // the run's own fine solve
+    if (!penalized) {  // the run's own fine solve and its factorization of K_ff
+        diagnose_options.fine_solution = &u.u;
+        diagnose_options.fine_factorization = u.factorization.get();
+    }
     Diagnostics d = diagnose(h, fine.f, diagnose_options);
     coarsen::FineComparison c;
     ComparisonReport report;
@@ -263,7 +267,7 @@ coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOpt
         build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
     coarsen::CoarseModel m = coarse_model(h, fine.f);
     m.compare_with_fine = [h, compare](const scene::Scene&, const scene::FineModel& f,
-                                       const Vector& u) {
+                                       const scene::StaticSolution& u) {
         return compare_levels(*h, f, u, compare);
     };
     return m;

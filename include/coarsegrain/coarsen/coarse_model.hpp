@@ -91,9 +91,10 @@ struct FineComparison {
     std::vector<io::Table> tables;
 };
 
-/// Figures and files of a method that need the fine solution `u` (over all fine DOFs).
+/// Figures and files of a method that need the fine solution (its u over all fine DOFs, and its
+/// factorization of K_ff if kept: see uses_fine_factorization in runtime.hpp).
 using CompareWithFine = std::function<FineComparison(
-    const scene::Scene& scene, const scene::FineModel& fine, const Vector& u)>;
+    const scene::Scene& scene, const scene::FineModel& fine, const scene::StaticSolution& u)>;
 
 /// A coarse model: an operator on coarse DOFs, its load and conditions, and the linear map that
 /// carries a coarse displacement to the fine nodes.

@@ -22,7 +22,7 @@ CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions
 
 /// How far a coarse solution carried to the fine mesh, u_c, is from the fine solution u.
 struct Errors {
-    double energy_rel = 0;            ///< ||u_c - u||_K / ||u||_K, K the fine stiffness
+    double energy_rel = 0;  ///< ||u_c - u||_K / ||u||_K, K the fine stiffness
     /// ||u_c - u||_K / ||g||_2 with g the load on the free DOFs (Chen 2019, Fig. 9, Table 1;
     /// the hierarchy's diagnostics normalise the same way)
     double energy_over_load = 0;
@@ -57,6 +57,16 @@ std::vector<std::string> configured_methods(const scene::Scene& scene);
 /// was validated when the scene was loaded.)
 /// @throws Error for an unknown method, InvalidScene naming the key otherwise
 void validate_method(const scene::Scene& scene, const std::string& method);
+
+/// Whether a run of `methods` on the scene uses the fine solve's factorization of K_ff (the
+/// fine stiffness without the Dirichlet DOFs), so that scene::solve_static should keep it
+/// (StaticSolution::factorization, which CompareWithFine receives): true if an mra method's
+/// diagnostics compute the spectrum of the fine operator and it is K_ff (every Dirichlet
+/// treatment but the penalties, which factorize their own), i.e. K_ff has at most
+/// coarse.spectrum_max_dofs rows, and the scene's solver is a direct one (cholmod, ldlt).
+/// Otherwise keeping it would only hold its memory through the run.
+bool uses_fine_factorization(const scene::Scene& scene, const scene::FineModel& fine,
+                             const std::vector<std::string>& methods);
 
 /// Builds the coarse model of `method` (one of method_names()) with the scene's coarse options.
 /// @throws everything validate_method throws; Error from the method's construction

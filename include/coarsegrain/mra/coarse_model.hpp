@@ -27,10 +27,11 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, con
 /// cells (one small free-body hierarchy each).
 inline constexpr Index kCellTensorsMaxCells = 1024;
 
-/// Figures of every level of `h` against the fine solution `u` (over all fine DOFs, the run's
-/// own fine solve), for the summary of `coarsen --method mra`: mra::diagnose for the load
-/// fine.f with DiagnoseOptions {options.max_spectrum_dofs, keep_solutions, &u} (without u for
-/// the penalty treatments, whose fine problem is their own). `report` is a ComparisonReport:
+/// Figures of every level of `h` against the fine solution `u` (the run's own fine solve), for
+/// the summary of `coarsen --method mra`: mra::diagnose for the load fine.f with
+/// DiagnoseOptions {options.max_spectrum_dofs, keep_solutions, &u.u, u.factorization} (without
+/// u for the penalty treatments, whose fine problem is their own): the fine operator is then
+/// not factorized again if the fine solve kept its factorization. `report` is a ComparisonReport:
 /// the diagnostics of the q levels, level k at index k-1, and the limit on the spectra. Each
 /// level's single-level solve u^k = Φ^{k,T} (A^k)^{-1} g^k (Sec. 4.1) is a reconstruction
 /// "level_<k>" of level index k-1; the table is levels_table (Figs. 8, 9: error and condition
@@ -49,7 +50,8 @@ inline constexpr Index kCellTensorsMaxCells = 1024;
 /// (their file, report and table) are skipped (`skipped` says why) above kCellTensorsMaxCells
 /// cells or if !options.cell_tensors.
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
-                                       const Vector& u, const CompareOptions& options);
+                                       const scene::StaticSolution& u,
+                                       const CompareOptions& options);
 
 /// Builds the hierarchy of the fine model with `options` and returns the coarsest level as a
 /// CoarseModel (coarse_model) whose compare_with_fine is compare_levels with `compare` (the
