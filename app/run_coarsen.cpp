@@ -127,7 +127,8 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
     const scene::FineModel& fine = f.model;
     const Vector& u = f.solution.u;
     const int dim = fine.mesh.dim();
-    const coarsen::CoarseModel coarse = coarsen::build_coarse_model(sc, fine, method);
+    const coarsen::CoarseModel coarse =
+        coarsen::build_coarse_model(sc, fine, method, f.solution.factorization.get());
     if (write_fine_vtu) write_fine(f, dir);
     Timings tc = coarse.timings;
     const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc.solver, tc);

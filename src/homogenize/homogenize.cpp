@@ -126,12 +126,16 @@ struct FineProblem {
     const SparseMatrix* K = nullptr;
     const mesh::Boundary* b = nullptr;
     Matrix normals;
+    /// A factorization of K without the scene's Dirichlet DOFs (mixed boundary), if there is one.
+    const solve::SpdSolver* mixed_factorization = nullptr;
 };
 
-void setup_fine_problem(FineProblem& p, const Coarsening& c, const scene::FineModel& fine) {
+void setup_fine_problem(FineProblem& p, const Coarsening& c, const scene::FineModel& fine,
+                        const solve::SpdSolver* fine_factorization) {
     if (mesh::is_simplex(fine.mesh.type)) {
         p.K = &fine.K;
         p.b = &fine.boundary;
+        p.mixed_factorization = fine_factorization;  // of fine.K without fine.bc.dofs
     } else {
         p.K_split = fem::stiffness_matrix(c.fine, c.fine_materials);
         p.b_split = mesh::boundary(c.fine);
@@ -153,7 +157,8 @@ HarmonicPart harmonic_part(const Coarsening& c, const FineProblem& p,
     HarmonicPart r;
     {
         const Phase phase("harmonic", timings);
-        r.h = harmonic_displacements(c.fine, *p.b, *p.K, p.normals, fixed_dofs);
+        r.h = harmonic_displacements(c.fine, *p.b, *p.K, p.normals, fixed_dofs,
+                                     fixed_dofs.empty() ? nullptr : p.mixed_factorization);
     }
     const Phase phase("tensors", timings);
     r.G_fine = mollifiers(c.fine, r.h);
@@ -172,7 +177,7 @@ Vector element_measures(const mesh::Mesh& m) {
 }  // namespace
 
 Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
-                      const std::string& method) {
+                      const std::string& method, const solve::SpdSolver* fine_factorization) {
     const bool effective = method == "effective-tensor";
     CG_VERIFY_AS(InvalidScene,
                  effective || method == "naive" || method == "voigt" || method == "reuss",
@@ -245,7 +250,7 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
     FineProblem problem;
     {
         const Phase phase("harmonic", &c.timings);
-        setup_fine_problem(problem, c, fine);
+        setup_fine_problem(problem, c, fine, fine_factorization);
     }
     const std::vector<Index> no_fixed;
     HarmonicPart part = harmonic_part(
@@ -411,8 +416,9 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
 }
 
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
-                                        const std::string& method) {
-    return coarse_model(scene, fine, coarsening(scene, fine, method));
+                                        const std::string& method,
+                                        const solve::SpdSolver* fine_factorization) {
+    return coarse_model(scene, fine, coarsening(scene, fine, method, fine_factorization));
 }
 
 }  // namespace coarsegrain::homogenize

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <variant>
 
+#include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/homogenize/homogenize.hpp"
 #include "coarsegrain/io/vtu.hpp"
@@ -344,6 +345,40 @@ TEST(EffectiveTensor, CoarseModelFieldsIn2D) {
                                                "C_voigt_22", "C_voigt_23", "C_voigt_33", "density",
                                                "E_x", "E_y", "G_condition"}));
     EXPECT_EQ(points, (std::vector<std::string>{"h_xx", "h_yy", "h_xy"}));
+}
+
+// On a simplicial fine mesh the mixed boundary's harmonic solve factorizes the fine stiffness
+// without the scene's Dirichlet DOFs, the very operator of the fine static solve: given that
+// solve's factorization it is not factorized again. Given the factorization of 2 K_ff instead,
+// the harmonic fields halve, which shows which one was used. A hex mesh is split into tets for
+// the harmonic solve (another operator), so there the runtime keeps no factorization for it.
+TEST(EffectiveTensor, MixedHarmonicSolveUsesTheFineFactorization) {
+    const auto scene = [](const char* element) {
+        return json{
+            {"mesh", grid({0, 0, 0}, {4, 1, 1}, {8, 2, 2}, element)},
+            {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.5}, {"ids", {1, 2}}}}}},
+            {"materials", {{"1", iso(1e3, 0.3)}, {"2", iso(1.0, 0.45)}}},
+            {"dirichlet", json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
+            {"loads", {{"gravity", {0, 0, -1}}}},
+            {"coarse",
+             {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {2, 1, 1}, "tet")}, {"boundary", "mixed"}}}};
+    };
+    const test::Setup s = test::setup(scene("tet"));
+    EXPECT_TRUE(coarsen::uses_fine_factorization(s.scene, s.fine, {"effective-tensor"}));
+    const test::Setup hex = test::setup(scene("hex"));
+    EXPECT_FALSE(coarsen::uses_fine_factorization(hex.scene, hex.fine, {"effective-tensor"}));
+
+    const scene::StaticSolution u = scene::solve_static(s.fine, s.scene.solver, nullptr, true);
+    const homogenize::Coarsening own = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
+    const homogenize::Coarsening shared =
+        homogenize::coarsening(s.scene, s.fine, "effective-tensor", u.factorization.get());
+    // Two factorizations of the same matrix (other orderings): round-off, 1e-10.
+    EXPECT_LT((shared.h - own.h).norm(), 1e-10 * own.h.norm());
+    solve::SpdSolver twice;
+    twice.compute(SparseMatrix(2.0 * fem::reduce(s.fine.K, s.fine.f, s.fine.bc).K));
+    const homogenize::Coarsening halved =
+        homogenize::coarsening(s.scene, s.fine, "effective-tensor", &twice);
+    EXPECT_LT((2.0 * halved.h - own.h).norm(), 1e-10 * own.h.norm());
 }
 
 // Mixed boundary (Sec. 3.8): the harmonic displacements vanish on the clamped nodes. The P1

@@ -47,12 +47,18 @@ struct Coarsening {
 
 /// Runs a coarsening method on the scene's coarse mesh.
 /// @param[in] method  "effective-tensor", "naive", "voigt" or "reuss"
+/// @param[in] fine_factorization  optional: a factorization of the fine stiffness without the
+///                    Dirichlet DOFs (fine.K without fine.bc.dofs, as scene::solve_static
+///                    factorizes it). The harmonic solve of the mixed boundary (coarse.boundary
+///                    "mixed") on a simplicial fine mesh, whose operator that is, then uses it
+///                    instead of factorizing it again; other coarsenings ignore it.
 /// @throws InvalidScene for an unknown method, a missing coarse.mesh or a bad coarse.* value
 /// @throws Error if the coarse mesh is degenerate, does not overlap the fine mesh (e.g. other
 ///         units), misses part of it, holds an element without fine material or a node far
 ///         outside it, or if a coarse mollifier is singular (naming the coarse element)
 Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
-                      const std::string& method);
+                      const std::string& method,
+                      const solve::SpdSolver* fine_factorization = nullptr);
 
 /// The coarse model of a method (the CLI's `coarsen` calls this): coarse stiffness from one
 /// anisotropic material per coarse element (fem::stiffness_matrix), lumped mass from the fine
@@ -63,10 +69,12 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
 /// directional Young's moduli, and for the effective-tensor method G_condition, plus fallback
 /// for a mixed boundary) and, for the effective-tensor method, harmonic.vtu (fine mesh; point
 /// fields h_xx, h_yy, ...). Timings: "intersect", "harmonic", "tensors", "assemble", "maps".
+/// `fine_factorization` as for coarsening.
 /// @throws InvalidScene if a dirichlet box selects no coarse node or a traction box no coarse
 ///         boundary facet; everything coarsening throws
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
-                                        const std::string& method);
+                                        const std::string& method,
+                                        const solve::SpdSolver* fine_factorization = nullptr);
 
 /// The coarse model of a finished coarsening (build_coarse_model = this after coarsening).
 coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
