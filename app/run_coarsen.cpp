@@ -9,6 +9,7 @@
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/io/file_util.hpp"
+#include "method_json.hpp"
 #include "output.hpp"
 #include "plots.hpp"
 #include "report.hpp"
@@ -34,12 +35,16 @@ nlohmann::json errors_json(const coarsen::Errors& e) {
             {"stress_rel", e.stress_rel}};
 }
 
-FineRun solve_fine(const scene::Scene& sc, double read_seconds) {
+// The fine model and its solution; the solution keeps the factorization if one of `methods`
+// uses it.
+FineRun solve_fine(const scene::Scene& sc, const std::vector<std::string>& methods,
+                   double read_seconds) {
     FineRun f;
     f.timings.add("read", read_seconds);
     f.model = scene::build_fine_model(sc, &f.timings);
     print_warnings(f.model.warnings);
-    f.solution = scene::solve_static(f.model, sc.solver, &f.timings);
+    f.solution = scene::solve_static(f.model, sc.solver, &f.timings,
+                                     coarsen::uses_fine_factorization(sc, f.model, methods));
     f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
     return f;
 }
@@ -85,17 +90,19 @@ nlohmann::json write_solution(const fs::path& dir, const std::string& name, cons
 }
 
 // The method's figures and files that need the fine solution (CoarseModel::compare_with_fine):
-// its report's keys replace those of `coarse_json`, its files and tables (as CSV) are written to
+// its report goes into `coarse_json` (add_comparison_json), its files and tables (as CSV) to
 // `dir`, and the tables' plots are made last. Returns the plot images
 // made. The phase "compare" goes to `timings`.
 nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene::Scene& sc,
-                                 const scene::FineModel& fine, const Vector& u, const fs::path& dir,
+                                 const scene::FineModel& fine,
+                                 const scene::StaticSolution& solution, const fs::path& dir,
                                  nlohmann::json& coarse_json, Timings& timings) {
     nlohmann::json made = nlohmann::json::array();
     if (!coarse.compare_with_fine) return made;
     const Phase phase("compare", &timings);
-    const coarsen::FineComparison c = coarse.compare_with_fine(sc, fine, u);
-    coarse_json.update(c.report);
+    const Vector& u = solution.u;
+    const coarsen::FineComparison c = coarse.compare_with_fine(sc, fine, solution);
+    add_comparison_json(coarse_json, coarse.report, c.report);
     for (const coarsen::Reconstruction& r : c.reconstructions)
         coarse_json.at("levels").at(r.level).update(write_solution(dir, r.name, sc, fine, u, r.u));
     for (const coarsen::VtuOutput& o : c.outputs)
@@ -120,7 +127,8 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
     const scene::FineModel& fine = f.model;
     const Vector& u = f.solution.u;
     const int dim = fine.mesh.dim();
-    const coarsen::CoarseModel coarse = coarsen::build_coarse_model(sc, fine, method);
+    const coarsen::CoarseModel coarse =
+        coarsen::build_coarse_model(sc, fine, method, f.solution.factorization.get());
     if (write_fine_vtu) write_fine(f, dir);
     Timings tc = coarse.timings;
     const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc.solver, tc);
@@ -136,8 +144,9 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         for (const coarsen::VtuOutput& o : coarse.outputs)
             io::write_vtu((dir / o.file).string(), o.mesh, o.fields);
     }
-    nlohmann::json coarse_json = coarse.report;
-    const nlohmann::json plots = compare_with_fine(coarse, sc, fine, u, dir, coarse_json, tc);
+    nlohmann::json coarse_json = method_json(coarse.report);
+    const nlohmann::json plots =
+        compare_with_fine(coarse, sc, fine, f.solution, dir, coarse_json, tc);
     r.dofs = coarse.K.rows();
     r.build_seconds = sum(coarse.timings);
     r.factorize_and_solve = tc["factorize"] + tc["solve"];
@@ -200,7 +209,7 @@ void print_method_table(const scene::Scene& sc, const std::string& method, const
 
 void run_one(const scene::Scene& sc, const std::string& method, const fs::path& dir,
              double read_seconds) {
-    FineRun f = solve_fine(sc, read_seconds);
+    FineRun f = solve_fine(sc, {method}, read_seconds);
     const MethodResult r = run_method(sc, f, method, dir, "solution_fine.vtu", true);
     print_method_table(sc, method, f, r);
     std::printf(
@@ -230,9 +239,10 @@ MethodResult try_method(const scene::Scene& sc, FineRun& f, const std::string& m
 
 int run_comparison(const scene::Scene& sc, const std::vector<std::string>& methods,
                    const fs::path& dir, const std::string& command, double read_seconds) {
-    FineRun f = solve_fine(sc, read_seconds);
+    FineRun f = solve_fine(sc, methods, read_seconds);
     std::vector<MethodResult> results;
     for (const std::string& method : methods) results.push_back(try_method(sc, f, method, dir));
+    f.solution.factorization.reset();  // used by the methods only
     write_fine(f, dir);
     const nlohmann::json plots = write_report(sc, command, f, results, dir);
     nlohmann::json fine_json = fine_sizes(f.model);

@@ -77,13 +77,29 @@ void validate_method(const scene::Scene& scene, const std::string& method) {
                      scene.source, c.key, method, fmt::join(c.value, ", "));
 }
 
+bool uses_fine_factorization(const scene::Scene& scene, const scene::FineModel& fine,
+                             const std::vector<std::string>& methods) {
+    if (scene.solver.backend == solve::Backend::ConjugateGradient) return false;
+    const Index free_dofs = fine.K.rows() - static_cast<Index>(fine.bc.dofs.size());
+    return std::any_of(methods.begin(), methods.end(), [&](const std::string& method) {
+        if (method == "effective-tensor")
+            return scene.coarse.homogenize.mixed_boundary && mesh::is_simplex(fine.mesh.type);
+        if (!is_hierarchy(method) || free_dofs > scene.coarse.mra_compare.max_spectrum_dofs)
+            return false;
+        const mra::DirichletTreatment t = hierarchy_options(scene, method).dirichlet;
+        return t != mra::DirichletTreatment::Penalty &&
+               t != mra::DirichletTreatment::DiagonalPenalty;
+    });
+}
+
 CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
-                               const std::string& method) {
+                               const std::string& method,
+                               const solve::SpdSolver* fine_factorization) {
     validate_method(scene, method);
     CoarseModel m = is_hierarchy(method)
                         ? mra::build_coarse_model(hierarchy_options(scene, method),
                                                   scene.coarse.mra_compare, fine)
-                        : homogenize::build_coarse_model(scene, fine, method);
+                        : homogenize::build_coarse_model(scene, fine, method, fine_factorization);
     m.method = method;
     return m;
 }

@@ -154,8 +154,13 @@ Vector expand(const ReducedSystem& sys, const Vector& u_free, const Dirichlet& b
 
 Vector solve_static(const SparseMatrix& K, const Vector& f, const Dirichlet& bc,
                     const solve::SolverOptions& options, Timings* timings) {
-    const ReducedSystem sys = reduce(K, f, bc);
     solve::SpdSolver solver(options);
+    return solve_static(K, f, bc, solver, timings);
+}
+
+Vector solve_static(const SparseMatrix& K, const Vector& f, const Dirichlet& bc,
+                    solve::SpdSolver& solver, Timings* timings) {
+    const ReducedSystem sys = reduce(K, f, bc);
     {
         const Phase phase("factorize", timings);
         solver.compute(sys.K);

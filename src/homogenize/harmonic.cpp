@@ -158,7 +158,8 @@ double mandel_weight(int dim, int J) {
 
 Matrix harmonic_displacements(const mesh::Mesh& mesh, const mesh::Boundary& b,
                               const SparseMatrix& K, const Matrix& normals,
-                              const std::vector<Index>& fixed_dofs) {
+                              const std::vector<Index>& fixed_dofs,
+                              const solve::SpdSolver* factorization) {
     detail::verify_simplicial(mesh, "harmonic displacements");
     const int dim = mesh.dim(), n = mandel_size(dim);
     const Index ndofs = mesh.num_dofs();
@@ -202,9 +203,13 @@ Matrix harmonic_displacements(const mesh::Mesh& mesh, const mesh::Boundary& b,
     }
     bc.values = Vector::Zero(static_cast<Index>(bc.dofs.size()));
     const fem::ReducedSystem sys = fem::reduce(K, Vector::Zero(ndofs), bc);
-    solve::SpdSolver solver;
+    CG_VERIFY(!factorization || (!neumann && factorization->rows() == sys.K.rows()),
+              "harmonic displacements: a factorization of {} rows for {} free DOFs{}",
+              factorization ? factorization->rows() : 0, sys.K.rows(),
+              neumann ? " (pure Neumann: its own operator)" : "");
+    solve::SpdSolver own;
     try {
-        solver.compute(sys.K);
+        if (!factorization) own.compute(sys.K);
     } catch (const NotPositiveDefinite& e) {
         CG_VERIFY_AS(NotPositiveDefinite, false,
                      "harmonic displacements: the fine stiffness is singular {} ({}); is the "
@@ -214,7 +219,7 @@ Matrix harmonic_displacements(const mesh::Mesh& mesh, const mesh::Boundary& b,
     }
     Matrix rhs(sys.free_dofs.size(), n);
     for (Index i = 0; i < sys.free_dofs.size(); ++i) rhs.row(i) = F.row(sys.free_dofs[i]);
-    const Matrix h_free = solver.solve(rhs);
+    const Matrix h_free = (factorization ? *factorization : own).solve(rhs);
     Matrix h = Matrix::Zero(ndofs, n);
     for (Index i = 0; i < sys.free_dofs.size(); ++i) h.row(sys.free_dofs[i]) = h_free.row(i);
     if (neumann) h -= R * moments.solve(W_R.transpose() * h);  // zeroth and first moments

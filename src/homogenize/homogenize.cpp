@@ -126,12 +126,16 @@ struct FineProblem {
     const SparseMatrix* K = nullptr;
     const mesh::Boundary* b = nullptr;
     Matrix normals;
+    /// A factorization of K without the scene's Dirichlet DOFs (mixed boundary), if there is one.
+    const solve::SpdSolver* mixed_factorization = nullptr;
 };
 
-void setup_fine_problem(FineProblem& p, const Coarsening& c, const scene::FineModel& fine) {
+void setup_fine_problem(FineProblem& p, const Coarsening& c, const scene::FineModel& fine,
+                        const solve::SpdSolver* fine_factorization) {
     if (mesh::is_simplex(fine.mesh.type)) {
         p.K = &fine.K;
         p.b = &fine.boundary;
+        p.mixed_factorization = fine_factorization;  // of fine.K without fine.bc.dofs
     } else {
         p.K_split = fem::stiffness_matrix(c.fine, c.fine_materials);
         p.b_split = mesh::boundary(c.fine);
@@ -153,7 +157,8 @@ HarmonicPart harmonic_part(const Coarsening& c, const FineProblem& p,
     HarmonicPart r;
     {
         const Phase phase("harmonic", timings);
-        r.h = harmonic_displacements(c.fine, *p.b, *p.K, p.normals, fixed_dofs);
+        r.h = harmonic_displacements(c.fine, *p.b, *p.K, p.normals, fixed_dofs,
+                                     fixed_dofs.empty() ? nullptr : p.mixed_factorization);
     }
     const Phase phase("tensors", timings);
     r.G_fine = mollifiers(c.fine, r.h);
@@ -172,7 +177,7 @@ Vector element_measures(const mesh::Mesh& m) {
 }  // namespace
 
 Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
-                      const std::string& method) {
+                      const std::string& method, const solve::SpdSolver* fine_factorization) {
     const bool effective = method == "effective-tensor";
     CG_VERIFY_AS(InvalidScene,
                  effective || method == "naive" || method == "voigt" || method == "reuss",
@@ -215,18 +220,19 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
         c.element_mass =
             coarse_element_masses(c.fine_materials, c.overlaps, c.coarse.num_elements());
     }
-    c.report["fine_simplices"] = c.fine.num_elements();
-    c.report["coarse_simplices"] = c.coarse.num_elements();
-    c.report["overlaps"] = c.overlaps.size();
+    c.report.fine_simplices = c.fine.num_elements();
+    c.report.coarse_simplices = c.coarse.num_elements();
+    c.report.overlaps = static_cast<Index>(c.overlaps.size());
     // Nodes on the fine boundary are reconstructed from barycentric weights to round-off of the
     // coordinates' size: only distances above that count as outside.
     const double round_off = 1e-12 * box_diagonal(c.fine);
-    c.report["coarse_nodes_outside"] = (outside.array() > round_off).count();
-    c.report["coarse_nodes_max_outside_distance"] = outside.size() ? outside.maxCoeff() : 0.0;
+    c.report.coarse_nodes_outside = (outside.array() > round_off).count();
+    c.report.coarse_nodes_max_outside_distance = outside.size() ? outside.maxCoeff() : 0.0;
     double fine_mass = 0;
     for (Index p = 0; p < c.fine.num_elements(); ++p)
         fine_mass += c.fine_materials.of(p).density * mesh::element_measure(c.fine, p);
-    c.report["mass"] = {{"fine", fine_mass}, {"coarse", c.element_mass.sum()}};
+    c.report.fine_mass = fine_mass;
+    c.report.coarse_mass = c.element_mass.sum();
 
     if (!effective) {
         const Phase phase("tensors", &c.timings);
@@ -234,7 +240,6 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
                              : method == "voigt" ? Average::Voigt
                                                  : Average::Reuss;
         c.C = average_tensors(kind, c.fine_materials, c.overlaps, c.coarse.num_elements());
-        c.report["map"] = "barycentric";
         return c;
     }
 
@@ -245,7 +250,7 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
     FineProblem problem;
     {
         const Phase phase("harmonic", &c.timings);
-        setup_fine_problem(problem, c, fine);
+        setup_fine_problem(problem, c, fine, fine_factorization);
     }
     const std::vector<Index> no_fixed;
     HarmonicPart part = harmonic_part(
@@ -292,11 +297,9 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
         cmin = std::min(cmin, k);
         cmax = std::max(cmax, k);
     }
-    c.report["normals"] = c.options.coarse_normals ? "coarse" : "fine";
-    c.report["boundary"] = c.options.mixed_boundary ? "mixed" : "neumann";
-    c.report["map"] = c.options.harmonic_map ? "harmonic" : "barycentric";
-    c.report["mollifier_condition"] = {{"min", cmin}, {"max", cmax}};
-    if (c.options.mixed_boundary) c.report["fallback_elements"] = c.fallback;
+    c.report.harmonic_map = c.options.harmonic_map;
+    c.report.effective_tensor = EffectiveTensorReport{
+        c.options.coarse_normals, c.options.mixed_boundary, cmin, cmax, c.fallback};
     return c;
 }
 
@@ -399,9 +402,10 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
             P = P * T;
         }
         m.to_fine = P;
-        m.report["conditions"] = {{"fixed_dofs", carried.fixed},
-                                  {"constrained_dofs", carried.constrained},
-                                  {"combinations", carried.combinations}};
+        auto& report = std::get<Report>(m.report);
+        report.fixed_dofs = carried.fixed;
+        report.constrained_dofs = carried.constrained;
+        report.combinations = carried.combinations;
         m.mass = coarse_mass(c.options.mass, std::move(P),
                              carried.constrained > 0 ? carried.T : SparseMatrix(), c.coarse, mats);
     }
@@ -437,8 +441,9 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
 }
 
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
-                                        const std::string& method) {
-    return coarse_model(scene, fine, coarsening(scene, fine, method));
+                                        const std::string& method,
+                                        const solve::SpdSolver* fine_factorization) {
+    return coarse_model(scene, fine, coarsening(scene, fine, method, fine_factorization));
 }
 
 }  // namespace coarsegrain::homogenize

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cmath>
 #include <limits>
 #include <memory>
 
@@ -47,18 +46,17 @@ Matrix cell_mean_stress(const scene::FineModel& fine, const Vector& u,
     return volume.cwiseInverse().asDiagonal() * sum;
 }
 
-/// Sec. 5.6 outputs of compare_levels: coarsest_cells.vtu and the report's "coarsest_cells".
+/// Sec. 5.6 outputs of compare_levels: coarsest_cells.vtu, its table and `report`.
 void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const Vector& u1,
-                        const Vector& u, bool enabled, coarsen::FineComparison& c) {
+                        const Vector& u, bool enabled, CoarsestCellsReport& report,
+                        coarsen::FineComparison& c) {
     const int dim = h.dim;
     const Eigen::Vector3i cells = h.level(1).cells;
     const Index nc = cell_count(cells, dim);
-    nlohmann::json& report = c.report["coarsest_cells"];
-    report["cells"] = nc;
+    report.cells = nc;
     if (!enabled || nc > kCellTensorsMaxCells) {
-        report["skipped"] = enabled
-                                ? fmt::format("{} coarsest cells > {}", nc, kCellTensorsMaxCells)
-                                : std::string("coarse.cell_tensors is false");
+        report.skipped = enabled ? fmt::format("{} coarsest cells > {}", nc, kCellTensorsMaxCells)
+                                 : std::string("coarse.cell_tensors is false");
         return;
     }
     const std::vector<CellTensor> tensors =
@@ -66,21 +64,19 @@ void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const 
     const Matrix D = youngs_directions(dim);
     const int n = mandel_size(dim);
     Matrix C_voigt(nc, n * n), E_dir(nc, D.rows()), E_axes(nc, dim);
-    nlohmann::json per_cell = nlohmann::json::array();
     for (Index i = 0; i < nc; ++i) {
         const Matrix& C = tensors[static_cast<std::size_t>(i)].C;
         const Matrix Cv = material::mandel_to_voigt(C);
         C_voigt.row(i) = Eigen::Map<const Vector>(Cv.data(), n * n).transpose();
         for (Index j = 0; j < D.rows(); ++j)
             E_dir(i, j) = material::directional_young(C, D.row(j).transpose());
-        std::vector<double> axes;
+        CellYoungs& y = report.per_cell.emplace_back();
         for (int a = 0; a < dim; ++a) {
             E_axes(i, a) = material::directional_young(C, Eigen::VectorXd::Unit(dim, a));
-            axes.push_back(E_axes(i, a));
+            y.E_axes.push_back(E_axes(i, a));
         }
-        per_cell.push_back({{"E_axes", axes},
-                            {"E_min", E_dir.row(i).minCoeff()},
-                            {"E_max", E_dir.row(i).maxCoeff()}});
+        y.E_min = E_dir.row(i).minCoeff();
+        y.E_max = E_dir.row(i).maxCoeff();
     }
     coarsen::VtuOutput out;
     out.file = "coarsest_cells.vtu";
@@ -111,10 +107,9 @@ void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const 
             youngs.values(row, dim + 1) = E_dir(i, j);
         }
     c.tables.push_back(std::move(youngs));
-    report["vtu"] = "coarsest_cells.vtu";
-    report["E_min"] = E_dir.minCoeff();
-    report["E_max"] = E_dir.maxCoeff();
-    report["per_cell"] = per_cell;
+    report.vtu = "coarsest_cells.vtu";
+    report.E_min = E_dir.minCoeff();
+    report.E_max = E_dir.maxCoeff();
 }
 
 /// Fig. 16 (2D): the table "coarsest_stress", one row per fine element with its centroid, its
@@ -195,93 +190,69 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
     }
     m.timings = h.timings;
 
-    const Options& o = h.options;
-    nlohmann::json radius = nlohmann::json::array();
-    for (const double r : o.radius)
-        radius.push_back(std::isinf(r) ? nlohmann::json("inf") : nlohmann::json(r));
-    m.report["options"] = {{"levels", o.levels},
-                           {"refinement", refinement_name(o.refinement)},
-                           {"radius", radius},
-                           {"radius_grid", radius_grid_name(o.radius_grid)},
-                           {"truncation", o.truncation},
-                           {"invariance", o.invariance},
-                           {"dirichlet", dirichlet_name(o.dirichlet)}};
-    m.report["options"]["patch"] = o.patch;
-    m.report["options"]["patch_clip"] = o.patch_clip;
-    m.report["options"]["localization"] = localization_name(o.localization);
-    m.report["options"]["measurement"] = measurement_name(o.measurement);
-    m.report["options"]["defect_tolerance"] = o.defect_tolerance;
-    m.report["options"]["max_radius"] = o.max_radius;
-    nlohmann::json levels = nlohmann::json::array();
+    HierarchyReport report;
+    report.options = h.options;
     for (const Level& L : h.levels) {
-        levels.push_back(
-            {{"level", L.k},
-             {"cells", std::vector<int>(L.cells.data(), L.cells.data() + dim)},
-             {"nodes", grid_nodes(L.cells, dim)},
-             {"dofs", L.dofs.size()},
-             {"wavelets", L.W.rows()},
-             {"radius", std::isinf(L.radius) ? nlohmann::json("inf") : nlohmann::json(L.radius)},
-             {"build_seconds", L.build_seconds},
-             {"C_nnz", L.C_adapted.nonZeros()},
-             {"C_density", density(L.C_adapted, L.C_adapted.nonZeros())},
-             {"A_nnz", symmetric_nonzeros(L.A)},
-             {"A_density", density(L.A, symmetric_nonzeros(L.A))},
-             {"B_nnz", symmetric_nonzeros(L.B)},
-             {"B_density", density(L.B, symmetric_nonzeros(L.B))}});
+        LevelReport& r = report.levels.emplace_back();
+        r.level = L.k;
+        r.cells.assign(L.cells.data(), L.cells.data() + dim);
+        r.nodes = grid_nodes(L.cells, dim);
+        r.dofs = L.dofs.size();
+        r.wavelets = L.W.rows();
+        r.radius = L.radius;
+        r.build_seconds = L.build_seconds;
+        r.C_nnz = L.C_adapted.nonZeros();
+        r.C_density = density(L.C_adapted, L.C_adapted.nonZeros());
+        r.A_nnz = symmetric_nonzeros(L.A);
+        r.A_density = density(L.A, r.A_nnz);
+        r.B_nnz = symmetric_nonzeros(L.B);
+        r.B_density = density(L.B, r.B_nnz);
         double rings_sum = 0;
         int rings_count = 0, rings_max = 0;
-        for (const int r : L.region_rings)
-            if (r > 0) {
-                rings_sum += r;
+        for (const int rings : L.region_rings)
+            if (rings > 0) {
+                rings_sum += rings;
                 ++rings_count;
-                rings_max = std::max(rings_max, r);
+                rings_max = std::max(rings_max, rings);
             }
         if (rings_count > 0) {
-            levels.back()["region_rings_mean"] = rings_sum / rings_count;
-            levels.back()["region_rings_max"] = rings_max;
+            r.region_rings_mean = rings_sum / rings_count;
+            r.region_rings_max = rings_max;
         }
     }
-    m.report["levels"] = levels;
-    m.report["fine_dofs"] = h.fine_dofs.size();
+    report.fine_level = {h.num_levels(),
+                         std::vector<int>(h.fine_cells.data(), h.fine_cells.data() + dim),
+                         grid_nodes(h.fine_cells, dim), h.A_fine.nonZeros()};
+    report.fine_dofs = h.fine_dofs.size();
+    m.report = std::move(report);
     return m;
 }
 
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
-                                       const Vector& u, const nlohmann::json& build_levels,
+                                       const scene::StaticSolution& u,
                                        const CompareOptions& options) {
     const int q = h.num_levels();
     DiagnoseOptions diagnose_options{options.max_spectrum_dofs, true};
     const bool penalized = h.options.dirichlet == DirichletTreatment::Penalty ||
                            h.options.dirichlet == DirichletTreatment::DiagonalPenalty;
-    if (!penalized) diagnose_options.fine_solution = &u;  // the run's own fine solve
-    const Diagnostics d = diagnose(h, fine.f, diagnose_options);
+    if (!penalized) {  // the run's own fine solve and its factorization of K_ff
+        diagnose_options.fine_solution = &u.u;
+        diagnose_options.fine_factorization = u.factorization.get();
+    }
+    Diagnostics d = diagnose(h, fine.f, diagnose_options);
     coarsen::FineComparison c;
-    nlohmann::json levels = nlohmann::json::array();
-    for (int k = 1; k <= q; ++k) {
-        nlohmann::json entry =
-            k < q
-                ? build_levels.at(static_cast<std::size_t>(k - 1))
-                : nlohmann::json{
-                      {"level", q},
-                      {"cells", std::vector<int>(h.fine_cells.data(), h.fine_cells.data() + h.dim)},
-                      {"nodes", grid_nodes(h.fine_cells, h.dim)},
-                      {"A_nnz", h.A_fine.nonZeros()},
-                      // The fine grid has no refinement and no wavelets.
-                      {"C_nnz", nullptr},
-                      {"C_density", nullptr},
-                      {"B_nnz", nullptr},
-                      {"B_density", nullptr}};
-        entry.update(to_json(d.levels[static_cast<std::size_t>(k - 1)]));
-        levels.push_back(entry);
+    ComparisonReport report;
+    for (int k = 1; k <= q; ++k)
         c.reconstructions.push_back({fmt::format("level_{}", k),
                                      d.solutions[static_cast<std::size_t>(k - 1)],
                                      static_cast<std::size_t>(k - 1)});
-    }
-    c.report["levels"] = levels;
-    c.report["spectrum_max_dofs"] = options.max_spectrum_dofs;
     c.tables.push_back(levels_table(d));
-    add_coarsest_cells(h, fine, d.solutions.front(), d.solutions.back(), options.cell_tensors, c);
+    add_coarsest_cells(h, fine, d.solutions.front(), d.solutions.back(), options.cell_tensors,
+                       report.coarsest_cells, c);
     if (h.dim == 2) add_stress_map(fine, d.solutions.front(), d.solutions.back(), c);
+    report.levels = std::move(d.levels);
+    report.spectrum_max_dofs = options.max_spectrum_dofs;
+    c.report = std::move(report);
     return c;
 }
 
@@ -295,9 +266,9 @@ coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOpt
     const auto h = std::make_shared<const Hierarchy>(
         build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
     coarsen::CoarseModel m = coarse_model(h, fine.f);
-    m.compare_with_fine = [h, build_levels = m.report["levels"], compare](
-                              const scene::Scene&, const scene::FineModel& f, const Vector& u) {
-        return compare_levels(*h, f, u, build_levels, compare);
+    m.compare_with_fine = [h, compare](const scene::Scene&, const scene::FineModel& f,
+                                       const scene::StaticSolution& u) {
+        return compare_levels(*h, f, u, compare);
     };
     return m;
 }

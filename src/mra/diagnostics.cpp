@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <span>
 
@@ -19,11 +20,11 @@ namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
 
-/// y = A^{-1} x by a kept factorization: the operator of Lanczos for the smallest eigenvalue.
+/// y = A^{-1} x by a factorization of A: the operator of Lanczos for the smallest eigenvalue.
 class InverseOp {
   public:
     using Scalar = double;
-    explicit InverseOp(const SparseMatrix& A) { m_solver.compute(A); }
+    explicit InverseOp(const solve::SpdSolver& solver) : m_solver(solver) {}
     Index rows() const { return m_solver.rows(); }
     Index cols() const { return m_solver.rows(); }
     void perform_op(const double* x_in, double* y_out) const {
@@ -32,7 +33,7 @@ class InverseOp {
     }
 
   private:
-    solve::SpdSolver m_solver;
+    const solve::SpdSolver& m_solver;
 };
 
 /// Largest eigenvalue of the operator by Lanczos. Tolerance 1e-12 relative (Spectra's
@@ -60,16 +61,21 @@ Vector restrict_to(const Vector& v, const IndexVector& dofs) {
     return r;
 }
 
+/// A factorization of the matrix whose spectrum is asked for, made when first needed.
+using Factorization = std::function<const solve::SpdSolver&()>;
+
 /// Extreme eigenvalues of M (its lower triangle if `lower`), or NaN with L.spectrum_skipped set
 /// and the reason appended to L.spectrum_note if M has more than `limit` rows or Lanczos fails.
+/// The smallest uses `factorization` of M if given, else factorizes M.
 Spectrum level_spectrum(const SparseMatrix& M, bool lower, const char* name, Index limit,
-                        LevelDiagnostics& L) {
+                        LevelDiagnostics& L, const Factorization& factorization = {}) {
     std::string reason;
     if (M.rows() > limit) {
         reason = fmt::format("{}: {} rows > coarse.spectrum_max_dofs = {}", name, M.rows(), limit);
     } else {
         try {
-            return extreme_eigenvalues(lower ? symmetric_from_lower(M) : M);
+            const SparseMatrix A = lower ? symmetric_from_lower(M) : M;
+            return factorization ? extreme_eigenvalues(A, factorization()) : extreme_eigenvalues(A);
         } catch (const Error& e) {
             reason = fmt::format("{}: {}", name, e.what());
         }
@@ -99,14 +105,25 @@ double symmetric_sparsity(const SparseMatrix& lower) {
 Spectrum extreme_eigenvalues(const SparseMatrix& A) {
     CG_VERIFY(A.rows() > 0 && A.rows() == A.cols(),
               "mra diagnostics: eigenvalues of a {}x{} matrix", A.rows(), A.cols());
+    solve::SpdSolver factorization;
+    if (A.rows() > 1) factorization.compute(A);
+    return extreme_eigenvalues(A, factorization);
+}
+
+Spectrum extreme_eigenvalues(const SparseMatrix& A, const solve::SpdSolver& factorization) {
+    CG_VERIFY(A.rows() > 0 && A.rows() == A.cols(),
+              "mra diagnostics: eigenvalues of a {}x{} matrix", A.rows(), A.cols());
     if (A.rows() == 1) {
         const double a = A.coeff(0, 0);
         CG_VERIFY(a > 0, "mra diagnostics: 1x1 matrix {} is not positive definite", a);
         return {a, a};
     }
+    CG_VERIFY(factorization.rows() == A.rows(),
+              "mra diagnostics: a factorization of {} rows for a {}x{} matrix",
+              factorization.rows(), A.rows(), A.cols());
     // Both triangles are stored; the product uses the lower one.
     Spectra::SparseSymMatProd<double, Eigen::Lower, Eigen::ColMajor, Index> prod(A);
-    InverseOp inv(A);
+    InverseOp inv(factorization);
     Spectrum s;
     s.lambda_max = largest_eigenvalue(prod, "largest");
     s.lambda_min = 1.0 / largest_eigenvalue(inv, "smallest");
@@ -137,6 +154,10 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
     CG_VERIFY(!options.fine_solution || options.fine_solution->size() == h.fine_grid_dofs(),
               "mra diagnostics: the fine solution has {} entries, the fine grid {} DOFs",
               options.fine_solution ? options.fine_solution->size() : 0, h.fine_grid_dofs());
+    CG_VERIFY(!options.fine_factorization || !penalized,
+              "mra diagnostics: the {} treatment factorizes its own fine operator; give no fine "
+              "factorization",
+              dirichlet_name(h.options.dirichlet));
     const Vector u_grid =
         options.fine_solution ? *options.fine_solution : solver.solve_level(g_fine, q);
     const Vector u = restrict_to(u_grid, h.fine_dofs);
@@ -155,10 +176,15 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
         if (options.keep_solutions) d.solutions.push_back(std::move(u_k));
         const bool lower = k < q;  // Level::A is stored as its lower triangle, A_fine whole
         // The spectrum of the operator the level's solves factorize (boundary-blind levels:
-        // without their fixed DOFs, whose A^k is singular).
+        // without their fixed DOFs, whose A^k is singular), with their factorization: the
+        // caller's of the fine operator, or the solver's.
         const bool held = fixed_positions(h, k).size() > 0;
+        const Factorization factorization = [&]() -> const solve::SpdSolver& {
+            if (k == q && options.fine_factorization) return *options.fine_factorization;
+            return solver.factorization(k);
+        };
         const Spectrum sa = level_spectrum(held ? free_operator(h, k) : A, lower, "A",
-                                           options.max_spectrum_dofs, L);
+                                           options.max_spectrum_dofs, L, factorization);
         L.lambda_min_A = sa.lambda_min;
         L.lambda_max_A = sa.lambda_max;
         L.cond_A = sa.condition();
@@ -190,10 +216,10 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
 
 io::Table levels_table(const Diagnostics& d) {
     io::Table t{"mra_levels",
-                {"level",        "dofs",         "wavelets",     "error_over_g", "error_over_u",
-                 "lambda_min_A", "lambda_max_A", "cond_A",       "lambda_min_B", "lambda_max_B",
-                 "cond_B",       "sparsity_A",   "sparsity_B",   "sparsity_C",   "bytes_Phi",
-                 "bytes_Psi",    "bytes_C",      "bytes_A",      "bytes_B",      "build_seconds",
+                {"level",           "dofs",         "wavelets",   "error_over_g", "error_over_u",
+                 "lambda_min_A",    "lambda_max_A", "cond_A",     "lambda_min_B", "lambda_max_B",
+                 "cond_B",          "sparsity_A",   "sparsity_B", "sparsity_C",   "bytes_Phi",
+                 "bytes_Psi",       "bytes_C",      "bytes_A",    "bytes_B",      "build_seconds",
                  "spectrum_skipped"},
                 Matrix(static_cast<Index>(d.levels.size()), 21)};
     for (std::size_t i = 0; i < d.levels.size(); ++i) {
@@ -206,34 +232,6 @@ io::Table levels_table(const Diagnostics& d) {
             static_cast<double>(L.bytes_B), L.build_seconds, L.spectrum_skipped ? 1.0 : 0.0;
     }
     return t;
-}
-
-nlohmann::json to_json(const LevelDiagnostics& L) {
-    const auto number = [](double v) {
-        return std::isnan(v) ? nlohmann::json() : nlohmann::json(v);
-    };
-    return {{"level", L.k},
-            {"dofs", L.dofs},
-            {"wavelets", L.wavelets},
-            {"error_over_g", number(L.error_over_g)},
-            {"error_over_u", number(L.error_over_u)},
-            {"lambda_min_A", number(L.lambda_min_A)},
-            {"lambda_max_A", number(L.lambda_max_A)},
-            {"cond_A", number(L.cond_A)},
-            {"lambda_min_B", number(L.lambda_min_B)},
-            {"lambda_max_B", number(L.lambda_max_B)},
-            {"cond_B", number(L.cond_B)},
-            {"sparsity_A", number(L.sparsity_A)},
-            {"sparsity_B", number(L.sparsity_B)},
-            {"sparsity_C", number(L.sparsity_C)},
-            {"bytes_Phi", L.bytes_Phi},
-            {"bytes_Psi", L.bytes_Psi},
-            {"bytes_C", L.bytes_C},
-            {"bytes_A", L.bytes_A},
-            {"bytes_B", L.bytes_B},
-            {"build_seconds", L.build_seconds},
-            {"spectrum_skipped", L.spectrum_skipped},
-            {"spectrum_note", L.spectrum_note}};
 }
 
 }  // namespace coarsegrain::mra

@@ -27,9 +27,13 @@ void MultilevelSolver::factorize_level(int k) {
         s->compute(fine ? m_h.A_fine : m_h.level(k).A);
 }
 
-Vector MultilevelSolver::solve_on_level(const Vector& g, int k) {
+const solve::SpdSolver& MultilevelSolver::factorization(int k) {
     factorize_level(k);
-    const solve::SpdSolver& s = *m_A[static_cast<std::size_t>(k - 1)];
+    return *m_A[static_cast<std::size_t>(k - 1)];
+}
+
+Vector MultilevelSolver::solve_on_level(const Vector& g, int k) {
+    const solve::SpdSolver& s = factorization(k);
     if (fixed_positions(m_h, k).size() == 0) return s.solve(g);
     const IndexVector free = free_positions(m_h, k);
     Vector u = Vector::Zero(g.size());

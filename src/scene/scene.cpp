@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <set>
 
 #include "coarsegrain/fem/assembly.hpp"
@@ -608,12 +609,13 @@ std::string singular_cause(const FineModel& model, bool& held) {
 }  // namespace
 
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
-                            Timings* timings) {
+                            Timings* timings, bool keep_factorization) {
     solve::SolverOptions node_options = options;
     node_options.node_dofs = model.mesh.dim();  // K is interleaved per node
     StaticSolution s;
+    auto solver = std::make_shared<solve::SpdSolver>(node_options);
     try {
-        s.u = fem::solve_static(model.K, model.f, model.bc, node_options, timings);
+        s.u = fem::solve_static(model.K, model.f, model.bc, *solver, timings);
     } catch (const NotPositiveDefinite& e) {
         bool held = false;
         const std::string cause = singular_cause(model, held);
@@ -632,6 +634,7 @@ StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& 
         throw;
     }
     s.strain_energy = fem::strain_energy(model.K, s.u);
+    if (keep_factorization) s.factorization = std::move(solver);
     return s;
 }
 

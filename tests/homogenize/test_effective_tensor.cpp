@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <variant>
 
+#include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/homogenize/homogenize.hpp"
 #include "coarsegrain/io/vtu.hpp"
@@ -96,7 +98,7 @@ TEST_P(EffectiveTensorDim, Eq5HoldsAndTensorsAreSymmetricPositiveDefinite) {
     const int dim = GetParam();
     const test::Setup s = test::setup(spheres_scene(dim));
     const homogenize::Coarsening c = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
-    EXPECT_GT(c.report["coarse_nodes_outside"].get<int>(), 0);  // extrapolation is exercised
+    EXPECT_GT(c.report.coarse_nodes_outside, 0);  // extrapolation is exercised
     // 1e-10: two 6x6 products and an inverse of a matrix with condition number < 1e3.
     EXPECT_LT(eq5_defect(c), 1e-10);
     const auto [min_ratio, asym] = spd_figures(c);
@@ -234,7 +236,7 @@ TEST_P(EffectiveTensorDim, CoarseMassHasTheFineMassAndMoments) {
                 EXPECT_NEAR(coarse_moment, fine_moment, 1e-12 * fine_mass) << type;
             }
         }
-        EXPECT_NEAR(m.report["mass"]["coarse"].get<double>(), total_mass(M, dim),
+        EXPECT_NEAR(std::get<homogenize::Report>(m.report).coarse_mass, total_mass(M, dim),
                     1e-12 * total_mass(M, dim));
     }
 }
@@ -348,6 +350,40 @@ TEST(EffectiveTensor, CoarseModelFieldsIn2D) {
     EXPECT_EQ(points, (std::vector<std::string>{"h_xx", "h_yy", "h_xy"}));
 }
 
+// On a simplicial fine mesh the mixed boundary's harmonic solve factorizes the fine stiffness
+// without the scene's Dirichlet DOFs, the very operator of the fine static solve: given that
+// solve's factorization it is not factorized again. Given the factorization of 2 K_ff instead,
+// the harmonic fields halve, which shows which one was used. A hex mesh is split into tets for
+// the harmonic solve (another operator), so there the runtime keeps no factorization for it.
+TEST(EffectiveTensor, MixedHarmonicSolveUsesTheFineFactorization) {
+    const auto scene = [](const char* element) {
+        return json{
+            {"mesh", grid({0, 0, 0}, {4, 1, 1}, {8, 2, 2}, element)},
+            {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.5}, {"ids", {1, 2}}}}}},
+            {"materials", {{"1", iso(1e3, 0.3)}, {"2", iso(1.0, 0.45)}}},
+            {"dirichlet", json::array({box({-1e-9, -1, -1}, {1e-9, 2, 2})})},
+            {"loads", {{"gravity", {0, 0, -1}}}},
+            {"coarse",
+             {{"mesh", grid({0, 0, 0}, {4, 1, 1}, {2, 1, 1}, "tet")}, {"boundary", "mixed"}}}};
+    };
+    const test::Setup s = test::setup(scene("tet"));
+    EXPECT_TRUE(coarsen::uses_fine_factorization(s.scene, s.fine, {"effective-tensor"}));
+    const test::Setup hex = test::setup(scene("hex"));
+    EXPECT_FALSE(coarsen::uses_fine_factorization(hex.scene, hex.fine, {"effective-tensor"}));
+
+    const scene::StaticSolution u = scene::solve_static(s.fine, s.scene.solver, nullptr, true);
+    const homogenize::Coarsening own = homogenize::coarsening(s.scene, s.fine, "effective-tensor");
+    const homogenize::Coarsening shared =
+        homogenize::coarsening(s.scene, s.fine, "effective-tensor", u.factorization.get());
+    // Two factorizations of the same matrix (other orderings): round-off, 1e-10.
+    EXPECT_LT((shared.h - own.h).norm(), 1e-10 * own.h.norm());
+    solve::SpdSolver twice;
+    twice.compute(SparseMatrix(2.0 * fem::reduce(s.fine.K, s.fine.f, s.fine.bc).K));
+    const homogenize::Coarsening halved =
+        homogenize::coarsening(s.scene, s.fine, "effective-tensor", &twice);
+    EXPECT_LT((2.0 * halved.h - own.h).norm(), 1e-10 * own.h.norm());
+}
+
 // Mixed boundary (Sec. 3.8): the harmonic displacements vanish on the clamped nodes. The P1
 // interpolant of fields that vanish at two or more nodes of a coarse element has no strain along
 // their edge (or face), so exactly the coarse elements with >= 2 clamped nodes have a singular
@@ -373,7 +409,8 @@ TEST(EffectiveTensor, MixedBoundaryFallsBackWhereTheClampPinsAnEdge) {
         if (clamped >= 2) pinned.push_back(q);
     }
     EXPECT_EQ(c.fallback, pinned);
-    EXPECT_EQ(c.report["fallback_elements"].get<std::vector<Index>>(), pinned);
+    ASSERT_TRUE(c.report.effective_tensor.has_value());
+    EXPECT_EQ(c.report.effective_tensor->fallback_elements, pinned);
     EXPECT_LT(eq5_defect(c), 1e-10);
     EXPECT_GT(spd_figures(c).first, 0.0);
     // The harmonic coarse-to-fine map (built from the pure-Neumann fields, since elements fell
@@ -460,10 +497,8 @@ TEST(EffectiveTensor, BadInputIsNamed) {
     j["coarse"] = {{"mesh", cover}};
     j["dirichlet"] = json::array({box({0.25 - 1e-9, -1, -1}, {0.25 + 1e-9, 2, 2})});
     const test::Setup sd = test::setup(j);
-    EXPECT_EQ(homogenize::build_coarse_model(sd.scene, sd.fine, "voigt")
-                  .report["conditions"]["constrained_dofs"]
-                  .get<int>(),
-              24);
+    const coarsen::CoarseModel voigt = homogenize::build_coarse_model(sd.scene, sd.fine, "voigt");
+    EXPECT_EQ(std::get<homogenize::Report>(voigt.report).constrained_dofs, 24);
 }
 
 }  // namespace

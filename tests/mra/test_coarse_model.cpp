@@ -2,12 +2,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <variant>
 #include <vector>
 
-#include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
+#include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/mra/coarse_model.hpp"
 #include "coarsegrain/mra/multilevel_solver.hpp"
 #include "test_util.hpp"
@@ -47,9 +49,10 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         // Dirac: the three top coarse nodes sit on the clamped edge and have no basis function
         // (constrain = eliminate for Dirac); linear keeps them.
         EXPECT_EQ(m.bc.dofs.size(), std::string(refinement) == "dirac" ? 6u : 0u);
-        EXPECT_EQ(m.report["levels"].size(), 2u);
-        EXPECT_EQ(m.report["options"]["dirichlet"], "constrain");
-        EXPECT_EQ(m.report["options"]["patch_clip"], false);
+        const auto& report = std::get<mra::HierarchyReport>(m.report);
+        EXPECT_EQ(report.levels.size(), 2u);
+        EXPECT_EQ(report.options.dirichlet, mra::DirichletTreatment::Constrain);
+        EXPECT_FALSE(report.options.patch_clip);
         // The build phases are reported per level (their durations are not checked).
         std::vector<std::string> phases;
         for (const auto& entry : m.timings.entries()) phases.push_back(entry.first);
@@ -62,8 +65,8 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
         solve::SpdSolver solver;
         solver.compute(sys.K);
         const Vector u = m.to_fine * fem::expand(sys, solver.solve(sys.rhs), m.bc, 18);
-        const Hierarchy h =
-            build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, scene::parse_coarse_options(j["coarse"], "t").mra);
+        const Hierarchy h = build_hierarchy(fine.mesh, fine.K, fine.bc.dofs,
+                                            scene::parse_coarse_options(j["coarse"], "t").mra);
         MultilevelSolver ms(h);
         const Vector expected = ms.solve_level(fine.f, 1);
         // Two solves of the same 18-DOF system: round-off, 1e-12.
@@ -85,6 +88,54 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
     }
 }
 
+// The comparison with the fine solution takes the fine solve's factorization of K_ff for the
+// fine level's spectrum instead of factorizing the same operator again: given a solution whose
+// factorization is that of 2 K_ff, the fine level's lambda_min doubles. The runtime keeps the
+// factorization when an mra method will use it (coarsen::uses_fine_factorization).
+TEST(MraCoarseModel, ComparisonUsesTheFineSolvesFactorization) {
+    const scene::Scene s = scene::parse_scene(scene_json(), "test.json", "");
+    const scene::FineModel fine = scene::build_fine_model(s);
+    EXPECT_FALSE(scene::solve_static(fine, s.solver).factorization);
+    const scene::StaticSolution kept = scene::solve_static(fine, s.solver, nullptr, true);
+    ASSERT_TRUE(kept.factorization);
+    scene::StaticSolution twice = kept;
+    auto solver = std::make_shared<solve::SpdSolver>();
+    solver->compute(SparseMatrix(2.0 * fem::reduce(fine.K, fine.f, fine.bc).K));
+    twice.factorization = solver;
+    const coarsen::CoarseModel m = coarsen::build_coarse_model(s, fine, "mra");
+    const auto fine_level = [&](const scene::StaticSolution& u) {
+        const coarsen::FineComparison c = m.compare_with_fine(s, fine, u);
+        return std::get<ComparisonReport>(c.report).levels.back();
+    };
+    const LevelDiagnostics a = fine_level(kept), b = fine_level(twice);
+    ASSERT_FALSE(a.spectrum_skipped) << a.spectrum_note;
+    // Lanczos converges to 1e-12 relative on both; 1e-10.
+    EXPECT_NEAR(b.lambda_min_A, 2 * a.lambda_min_A, 1e-10 * a.lambda_min_A);
+    EXPECT_NEAR(b.lambda_max_A, a.lambda_max_A, 1e-10 * a.lambda_max_A);
+}
+
+// The fine factorization is kept for an mra method that computes the fine spectrum of K_ff with
+// a direct solver, and only then.
+TEST(MraCoarseModel, UsesFineFactorization) {
+    const auto uses = [](const json& j, const std::vector<std::string>& methods) {
+        const scene::Scene s = scene::parse_scene(j, "test.json", "");
+        return coarsen::uses_fine_factorization(s, scene::build_fine_model(s), methods);
+    };
+    json j = scene_json();
+    EXPECT_TRUE(uses(j, {"effective-tensor", "mra"}));
+    EXPECT_TRUE(uses(j, {"mra-dirac"}));
+    EXPECT_FALSE(uses(j, {"effective-tensor", "naive"}));
+    j["coarse"]["spectrum_max_dofs"] = 10;  // the fine spectrum is skipped
+    EXPECT_FALSE(uses(j, {"mra"}));
+    j["coarse"].erase("spectrum_max_dofs");
+    j["coarse"]["dirichlet"] = "penalty";  // its own fine operator; not so the blind variants
+    EXPECT_FALSE(uses(j, {"mra", "mra-linear"}));
+    EXPECT_TRUE(uses(j, {"mra", "mra-linear-blind"}));
+    j["coarse"].erase("dirichlet");
+    j["solver"] = {{"backend", "cg"}};  // no factorization
+    EXPECT_FALSE(uses(j, {"mra"}));
+}
+
 TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     const Options d = scene::parse_coarse_options(json(), "t").mra;
     EXPECT_EQ(d.levels, 3);
@@ -100,11 +151,13 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
     EXPECT_EQ(d.defect_tolerance, 0.0);
     EXPECT_EQ(d.max_radius, 16.0);
-    const Options o = scene::parse_coarse_options(json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
+    const Options o =
+        scene::parse_coarse_options(
+            json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
                         "radius_grid": "coarse", "defect_tolerance": 1e-3, "max_radius": 12, "localization": "node", "measurement": "stiffness", "patch": 2, "patch_clip": true, "truncation": 1e-5,
                         "invariance": false, "dirichlet": "diagonal_penalty", "mesh": {"file": "ignored.msh"}})"),
-                                                      "t")
-                          .mra;
+            "t")
+            .mra;
     EXPECT_EQ(o.levels, 4);
     EXPECT_EQ(o.refinement, Refinement::Dirac);
     ASSERT_EQ(o.radius.size(), 3u);

@@ -113,6 +113,53 @@ TEST(MraDiagnostics, ErrorSparsityAndStorage) {
     test::expect_error([&] { diagnose(h, p.f, given); }, "the fine solution has 3 entries");
 }
 
+// A factorization of the fine operator from the caller (the runtime's of K_ff) is the one the
+// fine level's smallest eigenvalue uses, so A^q is not factorized again: given that of 2 K_ff,
+// Lanczos on its inverse finds 2 lambda_min, while lambda_max (products with A^q itself) and the
+// coarse levels are unchanged. With and without the conditions in the hierarchy (constrain,
+// ignore), whose level-q solves both factorize K_ff.
+TEST(MraDiagnostics, FineSpectrumUsesTheGivenFactorization) {
+    const test::GridProblem p =
+        test::hung_problem(2, Eigen::Vector3i(8, 8, 1), 1.0, 1e3, test::checker_pattern);
+    const fem::ReducedSystem sys = fem::reduce(p.K, p.f, p.bc);
+    solve::SpdSolver twice;
+    twice.compute(SparseMatrix(2.0 * sys.K));
+    for (const DirichletTreatment t : {DirichletTreatment::Constrain, DirichletTreatment::Ignore}) {
+        Options o = test::exact_options(3, Refinement::Linear);
+        o.dirichlet = t;
+        const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+        const Diagnostics d = diagnose(h, p.f);
+        DiagnoseOptions given;
+        given.fine_factorization = &twice;
+        const Diagnostics d2 = diagnose(h, p.f, given);
+        const std::string what = dirichlet_name(t);
+        // Lanczos converges to 1e-12 relative on both; 1e-10.
+        const LevelDiagnostics &fine = d.levels.back(), &fine2 = d2.levels.back();
+        EXPECT_NEAR(fine2.lambda_min_A, 2 * fine.lambda_min_A, 1e-10 * fine.lambda_min_A) << what;
+        EXPECT_NEAR(fine2.lambda_max_A, fine.lambda_max_A, 1e-10 * fine.lambda_max_A) << what;
+        for (std::size_t k = 0; k + 1 < d.levels.size(); ++k)
+            EXPECT_EQ(d2.levels[k].lambda_min_A, d.levels[k].lambda_min_A) << what;
+    }
+    // A factorization of another size is not used: the fine spectrum is skipped and says why.
+    const Hierarchy h =
+        build_hierarchy(p.mesh, p.K, p.bc.dofs, test::exact_options(3, Refinement::Linear));
+    solve::SpdSolver other;
+    other.compute(symmetric_from_lower(h.level(1).A));
+    DiagnoseOptions wrong;
+    wrong.fine_factorization = &other;
+    const LevelDiagnostics fine = diagnose(h, p.f, wrong).levels.back();
+    EXPECT_TRUE(fine.spectrum_skipped);
+    EXPECT_NE(fine.spectrum_note.find("a factorization of"), std::string::npos)
+        << fine.spectrum_note;
+    // The penalty treatments factorize their own fine operator.
+    Options penalty = test::exact_options(3, Refinement::Linear);
+    penalty.dirichlet = DirichletTreatment::Penalty;
+    const Hierarchy hp = build_hierarchy(p.mesh, p.K, p.bc.dofs, penalty);
+    DiagnoseOptions given;
+    given.fine_factorization = &twice;
+    test::expect_error([&] { diagnose(hp, p.f, given); }, "factorizes its own fine operator");
+}
+
 /// Writes the CSV of each refinement of `p` (exact hierarchy, `levels` levels) into `dir`,
 /// checks that it parses back and that the error of nested Galerkin spaces never grows with k,
 /// and returns the file names separated by spaces. Prints the figures if `print`.

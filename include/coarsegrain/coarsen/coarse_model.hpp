@@ -4,15 +4,17 @@
 /// CoarseModel and carries its solution to the fine mesh, so every comparison (the effective
 /// tensors, the material-adapted hierarchy, the naive/Voigt/Reuss baselines) is the same code.
 #include <functional>
-#include <nlohmann/json.hpp>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/common/types.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
+#include "coarsegrain/homogenize/report.hpp"
 #include "coarsegrain/io/table.hpp"
 #include "coarsegrain/io/vtu.hpp"
+#include "coarsegrain/mra/report.hpp"
 #include "coarsegrain/scene/scene.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 
@@ -32,7 +34,7 @@ struct VtuOutput {
 struct Reconstruction {
     std::string name;
     Vector u;  ///< over all fine DOFs
-    /// The entry of the report's "levels" array (FineComparison::report) that receives this
+    /// The level whose summary entry (index into "levels" of summary "coarse") receives this
     /// reconstruction's "errors", "probes" and "vtu" (the file name).
     std::size_t level = 0;
 };
@@ -72,19 +74,27 @@ class FineMap {
     Apply apply_;
 };
 
+/// The figures of a coarse model, by method (the CLI writes them to summary "coarse"): none,
+/// the effective tensors' and baselines', or the hierarchy's build.
+using MethodReport = std::variant<std::monostate, homogenize::Report, mra::HierarchyReport>;
+
+/// The figures a method adds once the fine solution is known: none, or the hierarchy's levels
+/// against it (the CLI adds them to summary "coarse", merged with the MethodReport).
+using ComparisonReport = std::variant<std::monostate, mra::ComparisonReport>;
+
 /// What a method adds once the fine solution is known.
 struct FineComparison {
-    /// Figures for summary "coarse": each key replaces the model's own (CoarseModel::report).
-    nlohmann::json report = nlohmann::json::object();
+    ComparisonReport report;
     std::vector<Reconstruction> reconstructions;
     std::vector<VtuOutput> outputs;
     /// Tables of figures, written as <name>.csv; the app knows which it plots.
     std::vector<io::Table> tables;
 };
 
-/// Figures and files of a method that need the fine solution `u` (over all fine DOFs).
+/// Figures and files of a method that need the fine solution (its u over all fine DOFs, and its
+/// factorization of K_ff if kept: see uses_fine_factorization in runtime.hpp).
 using CompareWithFine = std::function<FineComparison(
-    const scene::Scene& scene, const scene::FineModel& fine, const Vector& u)>;
+    const scene::Scene& scene, const scene::FineModel& fine, const scene::StaticSolution& u)>;
 
 /// A coarse model: an operator on coarse DOFs, its load and conditions, and the linear map that
 /// carries a coarse displacement to the fine nodes.
@@ -102,9 +112,9 @@ struct CoarseModel {
     /// defines none. Effective tensors and baselines: by coarse.mass (homogenize::CoarseMass);
     /// mra: the Galerkin mass through the hierarchy.
     std::function<SparseMatrix(const SparseMatrix& M)> mass;
-    Timings timings;     ///< build phases; their sum is reported as coarse.timings.build
-    nlohmann::json report = nlohmann::json::object();  ///< method figures for summary "coarse"
-    std::vector<VtuOutput> outputs;                    ///< extra files for the output folder
+    Timings timings;      ///< build phases; their sum is reported as coarse.timings.build
+    MethodReport report;  ///< method figures for summary "coarse"
+    std::vector<VtuOutput> outputs;  ///< extra files for the output folder
     /// Optional (empty: none): called once by the runtime after the fine and coarse solves.
     CompareWithFine compare_with_fine;
 };

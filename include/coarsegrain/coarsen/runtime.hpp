@@ -22,7 +22,7 @@ CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions
 
 /// How far a coarse solution carried to the fine mesh, u_c, is from the fine solution u.
 struct Errors {
-    double energy_rel = 0;            ///< ||u_c - u||_K / ||u||_K, K the fine stiffness
+    double energy_rel = 0;  ///< ||u_c - u||_K / ||u||_K, K the fine stiffness
     /// ||u_c - u||_K / ||g||_2 with g the load on the free DOFs (Chen 2019, Fig. 9, Table 1;
     /// the hierarchy's diagnostics normalise the same way)
     double energy_over_load = 0;
@@ -58,9 +58,26 @@ std::vector<std::string> configured_methods(const scene::Scene& scene);
 /// @throws Error for an unknown method, InvalidScene naming the key otherwise
 void validate_method(const scene::Scene& scene, const std::string& method);
 
+/// Whether a run of `methods` on the scene uses the fine solve's factorization of K_ff (the
+/// fine stiffness without the Dirichlet DOFs), so that scene::solve_static should keep it
+/// (StaticSolution::factorization, for build_coarse_model and CompareWithFine). True with a
+/// direct solver (cholmod, ldlt) if one of the methods factorizes K_ff itself:
+/// - an mra method whose diagnostics compute the spectrum of the fine operator, which is K_ff
+///   for every Dirichlet treatment but the penalties (they factorize their own), i.e. if K_ff
+///   has at most coarse.spectrum_max_dofs rows;
+/// - the effective tensors' harmonic solve with coarse.boundary "mixed" on a simplicial fine
+///   mesh (on a hex or quad mesh it solves on the mesh split into simplices, another operator;
+///   the pure-Neumann one pins other DOFs).
+/// Otherwise keeping it would only hold its memory through the run.
+bool uses_fine_factorization(const scene::Scene& scene, const scene::FineModel& fine,
+                             const std::vector<std::string>& methods);
+
 /// Builds the coarse model of `method` (one of method_names()) with the scene's coarse options.
+/// `fine_factorization` (optional): the fine solve's factorization of K_ff, which the
+/// effective tensors' mixed harmonic solve uses where it is its operator (uses_fine_factorization).
 /// @throws everything validate_method throws; Error from the method's construction
 CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
-                               const std::string& method);
+                               const std::string& method,
+                               const solve::SpdSolver* fine_factorization = nullptr);
 
 }  // namespace coarsegrain::coarsen

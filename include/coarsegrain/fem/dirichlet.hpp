@@ -45,5 +45,9 @@ Vector expand(const ReducedSystem& sys, const Vector& u_free, const Dirichlet& b
 /// @throws Error as reduce; NotPositiveDefinite if the conditions do not hold the structure
 Vector solve_static(const SparseMatrix& K, const Vector& f, const Dirichlet& bc,
                     const solve::SolverOptions& options, Timings* timings = nullptr);
+/// The same with `solver` (and its options), which keeps the factorization of K_ff for further
+/// solves with the same conditions.
+Vector solve_static(const SparseMatrix& K, const Vector& f, const Dirichlet& bc,
+                    solve::SpdSolver& solver, Timings* timings = nullptr);
 
 }  // namespace coarsegrain::fem

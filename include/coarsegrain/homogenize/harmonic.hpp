@@ -15,6 +15,7 @@
 #include "coarsegrain/common/types.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/mesh/point_locator.hpp"
+#include "coarsegrain/solve/spd_solver.hpp"
 
 namespace coarsegrain::homogenize {
 
@@ -50,13 +51,17 @@ double mandel_weight(int dim, int J);
 /// @param[in] normals     #F by dim unit normals used in the traction: b.normals (exact), or
 ///                        coarse_boundary_normals (Sec. 4.2)
 /// @param[in] fixed_dofs  sorted DOFs held at 0 (mixed); empty for pure Neumann
+/// @param[in] factorization  mixed only, optional: a factorization of K without fixed_dofs
+///                        (fem::reduce's K_ff), e.g. a static solve's with the same conditions;
+///                        K is then not factorized again
 /// @return num_dofs by n matrix, column J = h_ab for Mandel pair J (interleaved DOFs)
 /// @throws Error if the mesh is not simplicial, sizes disagree, or the problem is singular
 ///         (disconnected parts in the pure Neumann case, a part without fixed DOFs in the mixed
 ///         case)
 Matrix harmonic_displacements(const mesh::Mesh& mesh, const mesh::Boundary& b,
                               const SparseMatrix& K, const Matrix& normals,
-                              const std::vector<Index>& fixed_dofs = {});
+                              const std::vector<Index>& fixed_dofs = {},
+                              const solve::SpdSolver* factorization = nullptr);
 
 /// The normals N of Sec. 4.2: for each fine boundary facet of the outer boundary (component 0),
 /// the outward unit normal of the coarse boundary facet it faces: the first one the ray from the

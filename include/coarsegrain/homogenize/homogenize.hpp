@@ -8,13 +8,13 @@
 /// fine mollifiers G_p (Sec. 3.5), the coarse-sampled fields ℍ (Sec. 3.2) and the coarse
 /// mollifiers 𝔾_q follow, and Eq. 8 gives one anisotropic tensor per coarse element. The
 /// baselines replace the last three steps by averages over the same overlaps.
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "coarsegrain/coarsen/coarse_model.hpp"
 #include "coarsegrain/homogenize/effective_tensor.hpp"
 #include "coarsegrain/homogenize/options.hpp"
+#include "coarsegrain/homogenize/report.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
 namespace coarsegrain::homogenize {
@@ -42,17 +42,23 @@ struct Coarsening {
     Matrix h_neumann, H_neumann;
     std::vector<Mandel6> G_fine_neumann;
     Timings timings;  ///< phases "intersect", "harmonic", "tensors"
-    nlohmann::json report = nlohmann::json::object();
+    Report report;
 };
 
 /// Runs a coarsening method on the scene's coarse mesh.
 /// @param[in] method  "effective-tensor", "naive", "voigt" or "reuss"
+/// @param[in] fine_factorization  optional: a factorization of the fine stiffness without the
+///                    Dirichlet DOFs (fine.K without fine.bc.dofs, as scene::solve_static
+///                    factorizes it). The harmonic solve of the mixed boundary (coarse.boundary
+///                    "mixed") on a simplicial fine mesh, whose operator that is, then uses it
+///                    instead of factorizing it again; other coarsenings ignore it.
 /// @throws InvalidScene for an unknown method, a missing coarse.mesh or a bad coarse.* value
 /// @throws Error if the coarse mesh is degenerate, does not overlap the fine mesh (e.g. other
 ///         units), misses part of it, holds an element without fine material or a node far
 ///         outside it, or if a coarse mollifier is singular (naming the coarse element)
 Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
-                      const std::string& method);
+                      const std::string& method,
+                      const solve::SpdSolver* fine_factorization = nullptr);
 
 /// The coarse model of a method (the CLI's `coarsen` calls this): coarse stiffness from one
 /// anisotropic material per coarse element (fem::stiffness_matrix), lumped mass from the fine
@@ -65,9 +71,11 @@ Coarsening coarsening(const scene::Scene& scene, const scene::FineModel& fine,
 /// directional Young's moduli, and for the effective-tensor method G_condition, plus fallback
 /// for a mixed boundary) and, for the effective-tensor method, harmonic.vtu (fine mesh; point
 /// fields h_xx, h_yy, ...). Timings: "intersect", "harmonic", "tensors", "assemble", "maps".
+/// `fine_factorization` as for coarsening.
 /// @throws everything coarsening throws
 coarsen::CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel& fine,
-                                        const std::string& method);
+                                        const std::string& method,
+                                        const solve::SpdSolver* fine_factorization = nullptr);
 
 /// The coarse model of a finished coarsening (build_coarse_model = this after coarsening).
 coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineModel& fine,

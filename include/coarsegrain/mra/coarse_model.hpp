@@ -1,7 +1,6 @@
 #pragma once
 /// @file The material-adapted hierarchy as a coarsening method (`coarsen --method mra`).
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <string>
 
 #include "coarsegrain/coarsen/coarse_model.hpp"
@@ -18,40 +17,40 @@ namespace coarsegrain::mra {
 /// interior nodes of a 2D grid for the linear refinement); the model's DOFs u_c = v / s are
 /// displacements of the coarse nodes. DOFs without a basis function (see
 /// Level::dropped_dofs) have empty rows and columns and are fixed at 0 in bc, as are, on a
-/// boundary-blind hierarchy, the DOFs of Level::fixed. `report` holds the
-/// options and per level: nodes, dofs, wavelets, radius, build_seconds, nnz and density of C̃,
-/// A and B, and storage bytes of Φ and Ψ; `timings` the phases of h. to_fine keeps h and
-/// applies Φ^{1,T} level by level (reconstruct) without forming Φ^1.
+/// boundary-blind hierarchy, the DOFs of Level::fixed. `report` is a HierarchyReport: the
+/// options, per level k < q nodes, dofs, wavelets, radius, build_seconds, nnz and density of C̃,
+/// A and B, and the fine level's cells, nodes and nonzeros of A^q; `timings` the phases of h.
+/// to_fine keeps h and applies Φ^{1,T} level by level (reconstruct) without forming Φ^1.
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, const Vector& f_fine);
 
 /// Cell tensors (cell_tensors.hpp) are computed only for coarsest grids of at most this many
 /// cells (one small free-body hierarchy each).
 inline constexpr Index kCellTensorsMaxCells = 1024;
 
-/// Figures of every level of `h` against the fine solution `u` (over all fine DOFs, the run's
-/// own fine solve), for the summary of `coarsen --method mra`: mra::diagnose for the load
-/// fine.f with DiagnoseOptions {options.max_spectrum_dofs, keep_solutions, &u} (without u for
-/// the penalty treatments, whose fine problem is their own). The report's "levels" has q
-/// entries, level k at index k-1: `build_levels[k-1]` (the coarse_model report of level k; for
-/// level q its cells, nodes and the nonzeros of A^q) updated with to_json of the level's
-/// diagnostics; "spectrum_max_dofs" states the limit. Each level's single-level solve
-/// u^k = Φ^{k,T} (A^k)^{-1} g^k (Sec. 4.1) is a reconstruction "level_<k>" of level k-1 of
-/// "levels"; the table is levels_table (Figs. 8, 9: error and condition number per level).
+/// Figures of every level of `h` against the fine solution `u` (the run's own fine solve), for
+/// the summary of `coarsen --method mra`: mra::diagnose for the load fine.f with
+/// DiagnoseOptions {options.max_spectrum_dofs, keep_solutions, &u.u, u.factorization} (without
+/// u for the penalty treatments, whose fine problem is their own): the fine operator is then
+/// not factorized again if the fine solve kept its factorization. `report` is a ComparisonReport:
+/// the diagnostics of the q levels, level k at index k-1, and the limit on the spectra. Each
+/// level's single-level solve u^k = Φ^{k,T} (A^k)^{-1} g^k (Sec. 4.1) is a reconstruction
+/// "level_<k>" of level index k-1; the table is levels_table (Figs. 8, 9: error and condition
+/// number per level).
 ///
 /// Sec. 5.6: coarsest_cells.vtu on the coarsest grid holds, per cell, the effective tensor
 /// "C_eff" (Voigt), the directional Young's modulus "E_x", "E_y" ("E_z"), "E_min", "E_max" and
 /// "E_directions" (at youngs_directions) of coarsest_cell_tensors (the same options as `h`), and
 /// the cell averages of the stress recovered on the fine mesh from the coarsest solve,
 /// "stress_coarse" = mean σ(u^1), and from the fine solve, "stress_fine" (physical components,
-/// as solution VTUs; Fig. 16). The report's "coarsest_cells" has the file, the cells, E_min and
-/// E_max over all cells and directions, and per cell "E_axes", "E_min", "E_max"; the table
+/// as solution VTUs; Fig. 16). The report's coarsest_cells has the file, the cells, E_min and
+/// E_max over all cells and directions, and per cell E_axes, E_min, E_max; the table
 /// "coarsest_youngs" has a row per cell and direction (cell, direction, E). In 2D the table
 /// "coarsest_stress" has a row per fine element: centroid x, y, area, E and the stress (xx,
 /// yy, xy, von Mises) of the fine solve and of the coarsest level's (Fig. 16). The cell tensors
-/// (their file, report and table) are skipped ("skipped" says why) above kCellTensorsMaxCells
+/// (their file, report and table) are skipped (`skipped` says why) above kCellTensorsMaxCells
 /// cells or if !options.cell_tensors.
 coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineModel& fine,
-                                       const Vector& u, const nlohmann::json& build_levels,
+                                       const scene::StaticSolution& u,
                                        const CompareOptions& options);
 
 /// Builds the hierarchy of the fine model with `options` and returns the coarsest level as a

@@ -4,12 +4,12 @@
 /// numbers of A^k and B^k (Figs. 7 and 8), sparsity and storage (Table 1), build time.
 #include <cstddef>
 #include <limits>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "coarsegrain/io/table.hpp"
 #include "coarsegrain/mra/hierarchy.hpp"
+#include "coarsegrain/solve/spd_solver.hpp"
 
 namespace coarsegrain::mra {
 
@@ -59,6 +59,12 @@ struct DiagnoseOptions {
     /// hierarchy's own fine problem: the eliminate, constrain or ignore treatment (the penalty
     /// treatments solve a penalized one).
     const Vector* fine_solution = nullptr;
+    /// A factorization of the fine operator that a level-q solve factorizes, free_operator(h, q)
+    /// (the fine stiffness without the fixed DOFs, as fem::solve_static factorizes it), if the
+    /// caller has one (the runtime's fine solve): the smallest eigenvalue of A^q then uses it
+    /// instead of factorizing A^q again. Not with the penalty treatments, whose fine operator
+    /// is their own.
+    const solve::SpdSolver* fine_factorization = nullptr;
 };
 
 /// Extreme eigenvalues of a symmetric positive-definite sparse matrix.
@@ -71,22 +77,23 @@ struct Spectrum {
 /// with shift 0, one CHOLMOD factorization). Never forms a dense matrix.
 /// @throws Error if A is empty, not positive definite, or Lanczos does not converge
 Spectrum extreme_eigenvalues(const SparseMatrix& A);
+/// The same with a factorization of A made beforehand (`factorization` solves with A).
+/// @throws Error as above, or if the factorization's size is not A's
+Spectrum extreme_eigenvalues(const SparseMatrix& A, const solve::SpdSolver& factorization);
 
 /// Fraction of zero entries of M (explicitly stored zeros count as zeros); 0 for an empty M.
 double sparsity(const SparseMatrix& M);
 double sparsity(const RunMatrix& M);
 
 /// All figures of all levels for the load `g_fine` (over all fine grid DOFs, as
-/// MultilevelSolver::solve_level takes it).
-/// @throws Error if g_fine has the wrong size or is zero on the hierarchy's fine DOFs
+/// MultilevelSolver::solve_level takes it). Each A^k is factorized once, for the level's solve
+/// and the smallest eigenvalue (A^q not at all with DiagnoseOptions::fine_factorization).
+/// @throws Error if g_fine has the wrong size or is zero on the hierarchy's fine DOFs, or a
+///         fine solution or factorization is given for a penalty treatment or has the wrong size
 Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOptions& options = {});
 
 /// The table "mra_levels": one row per level, columns as the LevelDiagnostics fields in their
 /// order (spectrum_skipped last, as 0 / 1; NaN where a level has no such figure).
 io::Table levels_table(const Diagnostics& d);
-
-/// The fields of one level as a JSON object (keys as the CSV columns plus spectrum_note; NaN
-/// becomes null).
-nlohmann::json to_json(const LevelDiagnostics& L);
 
 }  // namespace coarsegrain::mra

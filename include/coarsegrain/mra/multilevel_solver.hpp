@@ -36,6 +36,9 @@ class MultilevelSolver {
     /// Factorizes A^k / B^k now (otherwise on first use).
     void factorize_level(int k);
     void factorize_wavelets(int k);
+    /// The factorization of the operator a level-k solve factorizes (free_operator(h, k)),
+    /// made now if not yet: for further solves with it, e.g. the smallest eigenvalue of A^k.
+    const solve::SpdSolver& factorization(int k);
 
   private:
     /// u^k with A^k u^k = g^k on the free DOFs of level k and u^k = 0 at its fixed_positions.

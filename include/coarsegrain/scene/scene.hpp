@@ -6,6 +6,7 @@
 /// are rejected so a typo never silently changes a simulation.
 #include <initializer_list>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -139,16 +140,20 @@ FineModel build_fine_model(const Scene& scene, Timings* timings = nullptr);
 struct StaticSolution {
     Vector u;  ///< num_dofs displacement, interleaved
     double strain_energy = 0;
+    /// The factorization of K_ff, the stiffness without the Dirichlet DOFs (FineModel::bc.dofs,
+    /// fem::reduce), if kept: for further solves or the spectrum of the same operator.
+    std::shared_ptr<const solve::SpdSolver> factorization;
 };
 
 /// Solves K u = f with the Dirichlet conditions eliminated. Phases "factorize" and "solve".
+/// With `keep_factorization` the solution keeps the factorization (its memory with it).
 /// @throws NotPositiveDefinite naming the source and the cause: a connected part of the mesh
 ///         without a Dirichlet node (its size and centre), one whose fixed DOFs do not stop its
 ///         rigid motions, or else (every part held) the materials' stiffness contrast, at which
 ///         K is numerically singular; also for conjugate gradients that do not converge for one
 ///         of these causes (contrast from 1e10) -- otherwise their NotConverged
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
-                            Timings* timings = nullptr);
+                            Timings* timings = nullptr, bool keep_factorization = false);
 
 /// The scene's probes located once on a mesh, to sample many displacement fields (the frames
 /// of a time series).
