@@ -54,6 +54,11 @@ std::vector<std::string> selected_methods(const cg::scene::Scene& scene, const s
     return list == "all" ? cg::coarsen::configured_methods(scene) : split_methods(list);
 }
 
+/// selected_methods, or none for an empty --method (the fine model alone).
+std::vector<std::string> optional_methods(const cg::scene::Scene& scene, const std::string& list) {
+    return list.empty() ? std::vector<std::string>{} : selected_methods(scene, list);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -161,29 +166,28 @@ int main(int argc, char** argv) {
     int failed = 0;  // methods of a comparison that could not run
     try {
         const auto start = std::chrono::steady_clock::now();
+        const auto since_start = [&] {
+            return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        };
         if (*solve) {
             const cg::scene::Scene sc = cg::scene::load_scene(scene_file);
-            const double read =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double read = since_start();
             cg::app::run_solve(sc, out_dir, read);
         } else if (*coarsen) {
             const cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
-            const double read =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double read = since_start();
             failed = cg::app::run_coarsen(sc, selected_methods(sc, method), coarsen_out, "coarsen",
                                           read);
         } else if (*simulate) {
             const cg::scene::Scene sc = cg::scene::load_scene(sim_scene);
-            const double read =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double read = since_start();
             const std::vector<std::string> methods = sim_methods.empty()
                                                          ? std::vector<std::string>{}
                                                          : selected_methods(sc, sim_methods);
             failed = cg::app::run_simulate(sc, methods, sim_out, read);
         } else if (*modes) {
             const cg::scene::Scene sc = cg::scene::load_scene(modes_scene);
-            const double read =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double read = since_start();
             const std::vector<std::string> methods = modes_methods.empty()
                                                          ? std::vector<std::string>{}
                                                          : selected_methods(sc, modes_methods);
@@ -191,8 +195,7 @@ int main(int argc, char** argv) {
         } else if (*demo) {
             const cg::scene::Scene sc =
                 cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
-            const double read =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double read = since_start();
             failed = cg::app::run_coarsen(sc, cg::coarsen::configured_methods(sc), demo_out, "demo",
                                           read);
         }

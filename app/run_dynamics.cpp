@@ -179,6 +179,20 @@ io::Table trajectory_table(const std::vector<double>& times,
     return t;
 }
 
+/// The summary with its method entries: one method's keys at the top level, several in
+/// "methods" (with "failed_methods"); and the peak memory.
+nlohmann::json with_methods(nlohmann::json summary, const std::vector<nlohmann::json>& entries,
+                            int failed) {
+    if (entries.size() == 1 && !entries[0].contains("error")) {
+        summary.update(entries[0]);
+    } else if (!entries.empty()) {
+        summary["methods"] = entries;
+        summary["failed_methods"] = failed;
+    }
+    summary["peak_memory_mb"] = peak_rss_mb();
+    return summary;
+}
+
 nlohmann::json fine_json(const FineDynamics& f) {
     nlohmann::json j = fine_sizes(f.model);
     j["timings"] = timings_json(f.timings);
@@ -300,14 +314,7 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
             {{"point", to_std(sc.probes[p])}, {"u_fine", probe_series(fine_result.probes, p)}});
     summary["probes"] = probes;
     summary["timings"] = {{"fine", timings_json(fine.timings)}};
-    if (methods.size() == 1 && !entries[0].contains("error")) {
-        summary.update(entries[0]);
-    } else if (!methods.empty()) {
-        summary["methods"] = entries;
-        summary["failed_methods"] = failed;
-    }
-    summary["peak_memory_mb"] = peak_rss_mb();
-    write_summary(out_dir, summary);
+    write_summary(out_dir, with_methods(std::move(summary), entries, failed));
 
     std::printf("coarsegrain simulate: %s, %s, dt %g, %d steps\n", sc.source.c_str(),
                 sim::integrator_name(o.integrator).c_str(), o.dt, o.steps);
@@ -429,14 +436,7 @@ int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, i
                               {"threads", omp_get_max_threads()},
                               {"warnings", fm.warnings},
                               {"plots", plots}};
-    if (methods.size() == 1 && !entries[0].contains("error")) {
-        summary.update(entries[0]);
-    } else if (!methods.empty()) {
-        summary["methods"] = entries;
-        summary["failed_methods"] = failed;
-    }
-    summary["peak_memory_mb"] = peak_rss_mb();
-    write_summary(out_dir, summary);
+    write_summary(out_dir, with_methods(std::move(summary), entries, failed));
 
     std::printf("coarsegrain modes: %s, %d lowest modes (Hz)\n", sc.source.c_str(),
                 static_cast<int>(k));
