@@ -120,7 +120,7 @@ RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine,
     const Vector v0 = sim::uniform_field(m.K.rows(), o.initial_velocity);
     std::pair<sim::State, Vector> start;
     {
-        const Phase phase(method + " initial state", &c.timings);
+        const Phase phase("initial state", &c.timings);
         start = sim::initial_state(m.K, m.f, m.bc, v0, o, sc.solver);
     }
     const sim::Trajectory run =
@@ -132,7 +132,7 @@ RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine,
     std::vector<std::pair<double, std::string>> frames;
     double diff2 = 0, norm2 = 0, probe_diff = 0, probe_max = 0;
     {
-        const Phase phase(method + " write frames", &c.timings);
+        const Phase phase("write frames", &c.timings);
         fs::create_directories(dir / method);
         for (std::size_t i = 0; i < run.times.size(); ++i) {
             const Vector u = m.to_fine * run.u[i];
