@@ -369,7 +369,7 @@ int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, i
             CoarseDynamics c = build_coarse(sc, fine, method);
             sim::Modes cm;
             {
-                const Phase phase(method + " eigenpairs", &c.timings);
+                const Phase phase("eigenpairs", &c.timings);
                 cm = sim::modes(c.model.K, c.M, c.model.bc, count, sc.solver);
             }
             const Matrix carried = c.model.to_fine * cm.vectors;
@@ -448,7 +448,7 @@ int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, i
         std::printf("  %4d %12.6g", static_cast<int>(i + 1), fine_modes.frequencies_hz[i]);
         for (const nlohmann::json& e : entries)
             if (!e.contains("error"))
-                std::printf(" %12.6g (%+.0f%%)",
+                std::printf(" %12.6g (%+7.2f%%)",
                             e["coarse"]["frequencies_hz"][e["mac_pairs"][i].get<std::size_t>()]
                                 .get<double>(),
                             100 * e["errors"]["frequency_rel"][i].get<double>());

@@ -533,9 +533,10 @@ SparseMatrix galerkin_operator(const Hierarchy& h, const SparseMatrix& X, int k)
     for (Index i = 0; i < h.fine_dofs.size(); ++i) t.emplace_back(i, h.fine_dofs[i], 1.0);
     S.setFromTriplets(t.begin(), t.end());
     SparseMatrix Y = S * X * SparseMatrix(S.transpose());
-    for (int l = h.num_levels() - 1; l >= k; --l) {
-        const SparseMatrix C = h.level(l).C_adapted.sparse();
-        Y = C * Y * SparseMatrix(C.transpose());
+    for (int l = h.num_levels() - 1; l >= k; --l) {  // the products that make A^l
+        const Level& L = h.level(l);
+        Y = symmetric_from_lower(detail::congruence(
+            L.C_adapted.sparse(), Y, detail::node_blocks(L.dofs, L.cells, h.dim, kGroupSide[h.dim])));
     }
     Y.makeCompressed();
     return Y;
