@@ -34,13 +34,13 @@ def main(argv):
     import matplotlib.pyplot as plt
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
-    top = fine.max()
+    low, top = fine.min(), fine.max()
     for m in methods:
         hz = data[:, header.index(m + "_hz")]
-        top = max(top, hz.max())
-        left.plot(fine, hz, "o", label=m)
+        low, top = min(low, hz.min()), max(top, hz.max())
+        left.loglog(fine, hz, "o", label=m, alpha=0.8)
         right.semilogy(mode, np.maximum(np.abs(hz - fine) / fine, 1e-16), "o-", label=m)
-    left.plot([0, top], [0, top], "k--", linewidth=1, label="exact")
+    left.loglog([low, top], [low, top], "k--", linewidth=1, label="exact")
     left.set_xlabel("fine frequency (Hz)")
     left.set_ylabel("paired coarse frequency (Hz)")
     left.legend(fontsize=8)
