@@ -117,6 +117,14 @@ RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine,
                      CoarseDynamics& c, const std::string& method, const fs::path& dir) {
     const sim::DynamicsOptions& o = *sc.dynamics;
     const coarsen::CoarseModel& m = c.model;
+    // The initial velocity is one nodal velocity; the model's DOFs must be nodal displacements
+    // (they are not where DOFs are held in combination, homogenize::carry_dirichlet).
+    const int dim = fine.model.mesh.dim();
+    CG_VERIFY(o.initial_velocity.isZero() || m.K.rows() == dim * m.nodes,
+              "{}: dynamics.initial_velocity: the {} model's {} DOFs are not the displacements "
+              "of its {} nodes (conditions held in combination), so a nodal velocity does not "
+              "apply to them; start from rest or put coarse nodes on the clamped faces",
+              sc.source, method, m.K.rows(), m.nodes);
     const Vector v0 = sim::uniform_field(m.K.rows(), o.initial_velocity);
     std::pair<sim::State, Vector> start;
     {
