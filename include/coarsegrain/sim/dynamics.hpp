@@ -2,7 +2,6 @@
 /// @file Linear elastodynamics M ü + C u̇ + K u = f with Rayleigh damping C = α M + β K, for the
 /// fine model and every coarse model alike: implicit midpoint (Kharevych et al. 2009, Sec. 4.4,
 /// "Time Integration") and implicit Euler (Chen et al. 2019, Sec. 4.2), one factorization per run.
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -70,7 +69,8 @@ struct State {
 /// Dirichlet DOFs keep their prescribed values and zero velocity.
 class TimeStepper {
   public:
-    /// @param K  n x n stiffness, both triangles stored
+    /// @param K  n x n stiffness, both triangles stored (kept by reference: it must outlive the
+    ///           stepper, as M)
     /// @param M  n x n mass (consistent, lumped or Galerkin), symmetric positive definite on the
     ///           free DOFs
     /// @throws Error if sizes disagree or options are out of range; NotPositiveDefinite if the
