@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/io/file_util.hpp"
@@ -67,6 +68,21 @@ nlohmann::json probes_json(const scene::Scene& scene, const std::vector<Eigen::V
         j.push_back(p);
     }
     return j;
+}
+
+void check_methods(const scene::Scene& scene, const std::vector<std::string>& methods) {
+    if (methods.size() == 1) return coarsen::validate_method(scene, methods.front());
+    bool any_runnable = methods.empty();
+    std::string first_error;
+    for (const std::string& method : methods) {
+        try {
+            coarsen::validate_method(scene, method);
+            any_runnable = true;
+        } catch (const Error& e) {
+            if (first_error.empty()) first_error = e.what();
+        }
+    }
+    CG_VERIFY(any_runnable, "no method can run on this scene: {}", first_error);
 }
 
 void write_summary(const std::string& out_dir, const nlohmann::json& summary) {

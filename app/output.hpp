@@ -54,6 +54,12 @@ class OutputFolder {
     std::set<std::string> before_;  ///< entries of the folder once the previous run's are gone
 };
 
+/// Checks before any work that the methods can run on the scene (coarsen::validate_method): the
+/// only method must; of several, at least one (the others are reported as failed when their
+/// turn comes, so a comparison runs what it can). No method (the fine model alone) passes.
+/// @throws Error of the only method, or naming the first reason if none of several can run
+void check_methods(const scene::Scene& scene, const std::vector<std::string>& methods);
+
 /// Writes DIR/summary.json atomically.
 void write_summary(const std::string& out_dir, const nlohmann::json& summary);
 

@@ -302,19 +302,7 @@ int run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
         run_one(sc, methods.front(), out_dir, read_seconds);
         return 0;
     }
-    // Several methods: those that cannot run on this scene are reported in the comparison;
-    // if none can, nothing is worth solving.
-    bool any_runnable = false;
-    std::string first_error;
-    for (const std::string& method : methods) {
-        try {
-            coarsen::validate_method(sc, method);
-            any_runnable = true;
-        } catch (const Error& e) {
-            if (first_error.empty()) first_error = e.what();
-        }
-    }
-    CG_VERIFY(any_runnable, "no method can run on this scene: {}", first_error);
+    check_methods(sc, methods);
     const OutputFolder folder(out_dir);
     return run_comparison(sc, methods, out_dir, command, read_seconds);
 }

@@ -64,10 +64,34 @@ CoarseDynamics build_coarse(const scene::Scene& sc, const FineDynamics& fine,
     return c;
 }
 
-std::vector<std::string> check_methods(const scene::Scene& sc,
-                                       const std::vector<std::string>& methods) {
-    for (const std::string& m : methods) coarsen::validate_method(sc, m);
-    return methods;
+/// A coarse model's sizes and timings for summary "coarse".
+nlohmann::json coarse_json(const CoarseDynamics& c) {
+    return {{"nodes", c.model.nodes},
+            {"elements", c.model.elements},
+            {"dofs", c.model.K.rows()},
+            {"timings", timings_json(c.timings)}};
+}
+
+/// The summary entry of one method, {"method": method} completed by fill(entry). With several
+/// methods a failure is reported instead of thrown, as `coarsen` does: on stderr, as the entry's
+/// "error", and counted in `failed`; the method's files (DIR/<method>, DIR/<method>.pvd) are
+/// removed.
+template <class Fill>
+nlohmann::json method_entry(const std::string& method, std::size_t methods, const fs::path& dir,
+                            int& failed, Fill fill) {
+    nlohmann::json e = {{"method", method}};
+    try {
+        fill(e);
+    } catch (const Error& err) {
+        if (methods == 1) throw;
+        std::error_code ec;
+        fs::remove_all(dir / method, ec);
+        fs::remove(dir / (method + ".pvd"), ec);
+        std::fprintf(stderr, "coarsegrain: method %s failed: %s\n", method.c_str(), err.what());
+        e = {{"method", method}, {"error", err.what()}};
+        ++failed;
+    }
+    return e;
 }
 
 /// Whether `bytes` fit in half the physical memory (0 if unknown: assume they do).
@@ -256,8 +280,7 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
     int failed = 0;
     for (std::size_t k = 0; k < methods.size(); ++k) {
         const std::string& method = methods[k];
-        nlohmann::json e = {{"method", method}};
-        try {
+        entries.push_back(method_entry(method, methods.size(), dir, failed, [&](nlohmann::json& e) {
             CoarseDynamics c = build_coarse(sc, fine, method);
             results[k] = run_coarse(sc, fine, run, fine_result.probes, c, method, dir);
             nlohmann::json probes = nlohmann::json::array();
@@ -265,10 +288,7 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
                 probes.push_back({{"point", to_std(sc.probes[p])},
                                   {"u_fine", probe_series(fine_result.probes, p)},
                                   {"u", probe_series(results[k].probes, p)}});
-            e["coarse"] = {{"nodes", c.model.nodes},
-                           {"elements", c.model.elements},
-                           {"dofs", c.model.K.rows()},
-                           {"timings", timings_json(c.timings)}};
+            e["coarse"] = coarse_json(c);
             e["probes"] = probes;
             e["timings"] = {{"fine", timings_json(fine.timings)},
                             {"coarse", timings_json(c.timings)}};
@@ -276,13 +296,7 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
             e["errors"] = {{"trajectory_l2_rel", results[k].trajectory_l2_rel},
                            {"probe_max_rel", results[k].probe_max_rel}};
             e["pvd"] = method + ".pvd";
-        } catch (const Error& err) {
-            if (methods.size() == 1) throw;
-            std::fprintf(stderr, "error: method %s: %s\n", method.c_str(), err.what());
-            e["error"] = err.what();
-            ++failed;
-        }
-        entries.push_back(std::move(e));
+        }));
     }
 
     std::vector<std::pair<std::string, const RunResult*>> runs = {{"fine", &fine_result}};
@@ -372,8 +386,7 @@ int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, i
     std::vector<nlohmann::json> entries;
     int failed = 0;
     for (const std::string& method : methods) {
-        nlohmann::json e = {{"method", method}};
-        try {
+        entries.push_back(method_entry(method, methods.size(), dir, failed, [&](nlohmann::json& e) {
             CoarseDynamics c = build_coarse(sc, fine, method);
             sim::Modes cm;
             {
@@ -393,11 +406,8 @@ int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, i
                 mode_fields[static_cast<std::size_t>(i)].add_point_vector(
                     "mode_" + method, carried.col(p.coarse), fm.mesh.dim());
             }
-            e["coarse"] = {{"nodes", c.model.nodes},
-                           {"elements", c.model.elements},
-                           {"dofs", c.model.K.rows()},
-                           {"frequencies_hz", to_std(cm.frequencies_hz)},
-                           {"timings", timings_json(c.timings)}};
+            e["coarse"] = coarse_json(c);
+            e["coarse"]["frequencies_hz"] = to_std(cm.frequencies_hz);
             e["errors"] = {{"frequency_rel", rel}};
             e["mac"] = mac;
             e["mac_pairs"] = paired;
@@ -406,13 +416,7 @@ int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, i
             columns.conservativeResize(k, columns.cols() + 2);
             columns.col(columns.cols() - 2) = Eigen::Map<const Vector>(paired_hz.data(), k);
             columns.col(columns.cols() - 1) = Eigen::Map<const Vector>(mac.data(), k);
-        } catch (const Error& err) {
-            if (methods.size() == 1) throw;
-            std::fprintf(stderr, "error: method %s: %s\n", method.c_str(), err.what());
-            e["error"] = err.what();
-            ++failed;
-        }
-        entries.push_back(std::move(e));
+        }));
     }
     {
         const Phase phase("write", &fine.timings);
