@@ -11,20 +11,16 @@ fine frequency (the diagonal is exact); right: the relative error per mode.
 import sys
 
 import numpy as np
+from plot_csv import read_table
 
 
 def main(argv):
     if len(argv) != 2:
         sys.exit(__doc__)
     out, path = argv
-    try:
-        with open(path, encoding="utf-8") as f:
-            header = f.readline().strip().split(",")
-    except OSError as e:
-        sys.exit(f"plot_frequencies: cannot read {path}: {e}")
+    header, data = read_table(path, "plot_frequencies", ("mode", "fine_hz"))
     if header[:2] != ["mode", "fine_hz"]:
         sys.exit(f"plot_frequencies: {path}: the first columns must be 'mode', 'fine_hz'")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     mode, fine = data[:, 0], data[:, 1]
     methods = [c[:-3] for c in header[2:] if c.endswith("_hz")]
 

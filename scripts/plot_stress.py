@@ -16,6 +16,7 @@ and the same over the softest material alone (the elements of the smallest E), i
 import sys
 
 import numpy as np
+from plot_csv import read_table
 
 REQUIRED = ["x", "y", "area", "E"] + [
     f"{which}_{c}" for which in ("fine", "coarse") for c in ("xx", "yy", "xy", "von_mises")
@@ -23,20 +24,7 @@ REQUIRED = ["x", "y", "area", "E"] + [
 
 
 def read_csv(path):
-    try:
-        with open(path, encoding="utf-8") as f:
-            header = f.readline().strip().split(",")
-    except OSError as e:
-        sys.exit(f"plot_stress: cannot read {path}: {e}")
-    missing = [c for c in REQUIRED if c not in header]
-    if missing:
-        sys.exit(f"plot_stress: {path}: missing column(s) {', '.join(missing)}")
-    try:
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    except ValueError as e:
-        sys.exit(f"plot_stress: {path}: {e}")
-    if data.shape[0] == 0 or data.shape[1] != len(header):
-        sys.exit(f"plot_stress: {path}: expected rows of {len(header)} numbers")
+    header, data = read_table(path, "plot_stress", REQUIRED)
     return {name: data[:, i] for i, name in enumerate(header)}
 
 

@@ -12,20 +12,16 @@ import re
 import sys
 
 import numpy as np
+from plot_csv import read_table
 
 
 def main(argv):
     if len(argv) != 2:
         sys.exit(__doc__)
     out, path = argv
-    try:
-        with open(path, encoding="utf-8") as f:
-            header = f.readline().strip().split(",")
-    except OSError as e:
-        sys.exit(f"plot_trajectory: cannot read {path}: {e}")
-    if not header or header[0] != "time":
+    header, data = read_table(path, "plot_trajectory", ("time",))
+    if header[0] != "time":
         sys.exit(f"plot_trajectory: {path}: the first column must be 'time'")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     columns = {}
     for i, name in enumerate(header[1:], start=1):
         m = re.fullmatch(r"(.+)_p(\d+)_([xyz])", name)

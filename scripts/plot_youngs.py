@@ -10,21 +10,14 @@ polar curve E(d) (d and -d give the same E); in 3D E is plotted against the dire
 import sys
 
 import numpy as np
+from plot_csv import read_table
 
 
 def main(argv):
     if len(argv) != 2:
         sys.exit(__doc__)
     out, path = argv
-    try:
-        with open(path, encoding="utf-8") as f:
-            header = f.readline().strip().split(",")
-    except OSError as e:
-        sys.exit(f"plot_youngs: cannot read {path}: {e}")
-    missing = [c for c in ("cell", "dx", "dy", "E") if c not in header]
-    if missing:
-        sys.exit(f"plot_youngs: {path}: missing column(s) {', '.join(missing)}")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    header, data = read_table(path, "plot_youngs", ("cell", "dx", "dy", "E"))
     col = {name: data[:, i] for i, name in enumerate(header)}
     three_d = "dz" in col
 
