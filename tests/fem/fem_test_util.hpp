@@ -13,6 +13,7 @@
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
+#include "test_util.hpp"
 
 namespace coarsegrain::test {
 
@@ -64,6 +65,39 @@ inline std::vector<Index> plane_facets(const mesh::Mesh& m, const mesh::Boundary
     lo[axis] = value - 1e-9;
     hi[axis] = value + 1e-9;
     return mesh::facets_in_box(m, b, lo, hi);
+}
+
+/// The Mandel strain (e11 e22 [e33 √2e23 √2e13] √2e12) of the displacement gradient A.
+inline Eigen::VectorXd mandel_strain(const Matrix& A) {
+    const int dim = static_cast<int>(A.rows());
+    const Matrix eps = 0.5 * (A + A.transpose());
+    Eigen::VectorXd e(mandel_size(dim));
+    if (dim == 2) {
+        e << eps(0, 0), eps(1, 1), kSqrt2 * eps(0, 1);
+    } else {
+        e << eps(0, 0), eps(1, 1), eps(2, 2), kSqrt2 * eps(1, 2), kSqrt2 * eps(0, 2),
+            kSqrt2 * eps(0, 1);
+    }
+    return e;
+}
+
+/// The field of a patch test on mesh m: u = A x + b with a small A from Eigen's generator
+/// (entries in [-1e-3, 1e-3]) and a fixed b, prescribed on the nodes of the bounding box's faces.
+struct AffinePatch {
+    Matrix A;
+    Vector exact;  ///< u at every node, interleaved
+    fem::Dirichlet bc;
+};
+
+inline AffinePatch affine_patch(const mesh::Mesh& m) {
+    const int dim = m.dim();
+    AffinePatch p;
+    p.A.setRandom(dim, dim);
+    p.A *= 1e-3;
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(dim, 1e-3, -2e-3);
+    p.exact = test::linear_field(m.rest_positions, p.A, b);
+    for (const Index v : box_boundary_nodes(m)) p.bc.fix_nodes({v}, p.exact.segment(dim * v, dim));
+    return p;
 }
 
 /// All indices 0..n-1.

@@ -38,19 +38,6 @@ Matrix distorted_q1(ElementType type, unsigned seed) {
     return X;
 }
 
-Eigen::VectorXd mandel_strain(const Matrix& A) {
-    const int dim = static_cast<int>(A.rows());
-    const Matrix eps = 0.5 * (A + A.transpose());
-    Eigen::VectorXd e(mandel_size(dim));
-    if (dim == 2) {
-        e << eps(0, 0), eps(1, 1), kSqrt2 * eps(0, 1);
-    } else {
-        e << eps(0, 0), eps(1, 1), eps(2, 2), kSqrt2 * eps(1, 2), kSqrt2 * eps(0, 2),
-            kSqrt2 * eps(0, 1);
-    }
-    return e;
-}
-
 double element_volume(ElementType type, const Matrix& X) {
     mesh::Mesh m;
     m.type = type;
@@ -72,10 +59,10 @@ TEST_P(IncompatibleElement, SymmetricPsdWithExactlyTheRigidKernel) {
     for (unsigned seed = 1; seed <= 5; ++seed) {
         const Matrix X = distorted_q1(type, seed);
         for (const bool anisotropic : {true, false}) {
-            const Matrix C = anisotropic
-                                 ? test::random_spd_tensor(mandel_size(dim), seed)
-                                 : Matrix(material::tensor(material::isotropic(dim, 1.0, 0.4999, 1),
-                                                           dim));
+            const Matrix C =
+                anisotropic
+                    ? test::random_spd_tensor(mandel_size(dim), seed)
+                    : Matrix(material::tensor(material::isotropic(dim, 1.0, 0.4999, 1), dim));
             const Matrix K = fem::element_stiffness(type, X, C, fem::Formulation::Incompatible);
             EXPECT_EQ((K - K.transpose()).norm(), 0.0);  // symmetrized in the kernel
             // Rigid motions: K R is round-off (1e-12 relative to |K| |R|; the condensation
@@ -111,7 +98,7 @@ TEST_P(IncompatibleElement, UniformStrainEnergyIsExactOnDistortedElements) {
         Matrix A(dim, dim);
         A.setRandom();
         const Vector u = test::linear_field(X, A, Eigen::VectorXd::Ones(dim));
-        const Eigen::VectorXd e = mandel_strain(A);
+        const Eigen::VectorXd e = test::mandel_strain(A);
         const double expected = element_volume(type, X) * e.dot(C * e);
         const Matrix K = fem::element_stiffness(type, X, C, fem::Formulation::Incompatible);
         EXPECT_NEAR(u.dot(K * u), expected, 1e-12 * expected);
@@ -119,13 +106,13 @@ TEST_P(IncompatibleElement, UniformStrainEnergyIsExactOnDistortedElements) {
         double calculix = 0;
         if (dim == 3) {
             using S = fem::kernels::Q1<3>;
-            const auto Kc = fem::kernels::incompatible_stiffness<S, fem::kernels::ModeMapping::CalculiX>(
-                X, C);
+            const auto Kc =
+                fem::kernels::incompatible_stiffness<S, fem::kernels::ModeMapping::CalculiX>(X, C);
             calculix = u.dot(Kc * u);
         } else {
             using S = fem::kernels::Q1<2>;
-            const auto Kc = fem::kernels::incompatible_stiffness<S, fem::kernels::ModeMapping::CalculiX>(
-                X, C);
+            const auto Kc =
+                fem::kernels::incompatible_stiffness<S, fem::kernels::ModeMapping::CalculiX>(X, C);
             calculix = u.dot(Kc * u);
         }
         EXPECT_LT(calculix, (1 - 1e-5) * expected) << "CalculiX's mapping passes on seed " << seed;
@@ -150,18 +137,11 @@ TEST_P(IncompatibleElement, PatchTestOnADistortedMesh) {
                 ? material::anisotropic(dim, test::random_spd_tensor(mandel_size(dim), 9), 1)
                 : material::isotropic(dim, 2.0, 0.45, 1);
         const material::ElementMaterials mats = material::uniform(m, mat);
-        Matrix A(dim, dim);
-        A.setRandom();
-        A *= 1e-3;
-        const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(dim, 1e-3, -2e-3);
-        const Vector exact = test::linear_field(m.rest_positions, A, b);
-        fem::Dirichlet bc;
-        for (const Index v : test::box_boundary_nodes(m))
-            bc.fix_nodes({v}, exact.segment(dim * v, dim));
+        const auto [A, exact, bc] = test::affine_patch(m);
         const SparseMatrix K = fem::stiffness_matrix(m, mats, fem::Formulation::Incompatible);
         const Vector u = test::solve_dirichlet(K, Vector::Zero(m.num_dofs()), bc);
         EXPECT_LT((u - exact).lpNorm<Eigen::Infinity>(), 1e-10 * exact.lpNorm<Eigen::Infinity>());
-        const Eigen::VectorXd e = mandel_strain(A);
+        const Eigen::VectorXd e = test::mandel_strain(A);
         const Eigen::VectorXd sigma = material::tensor(mat, dim) * e;
         const fem::ElementStress s = fem::element_stress(m, mats, u);
         for (Index el = 0; el < m.num_elements(); ++el)
@@ -189,7 +169,8 @@ double cantilever_tip(ElementType type, const Eigen::VectorXi& cells, double nu,
     Eigen::VectorXd g = Eigen::VectorXd::Zero(dim);
     g[dim - 1] = -1;
     const Vector force = fem::gravity_load(m, mats, g);
-    Eigen::VectorXd box_lo = Eigen::VectorXd::Constant(dim, -1), box_hi = Eigen::VectorXd::Constant(dim, 2);
+    Eigen::VectorXd box_lo = Eigen::VectorXd::Constant(dim, -1),
+                    box_hi = Eigen::VectorXd::Constant(dim, 2);
     box_lo[0] = -1e-9;
     box_hi[0] = 1e-9;
     fem::Dirichlet bc;
@@ -229,9 +210,8 @@ TEST(IncompatibleConvergence, BothFormulationsConvergeToTheSameAnswer) {
         for (std::size_t i = 1; i < diff.size(); ++i) {
             RecordProperty(fmt::format("{}_ratio_{}", mesh::element_name(c.type), i),
                            fmt::format("{:.3f}", diff[i - 1] / diff[i]));
-            EXPECT_GT(diff[i - 1] / diff[i], 3.0)
-                << mesh::element_name(c.type) << " refinement " << i << ": " << diff[i - 1]
-                << " -> " << diff[i];
+            EXPECT_GT(diff[i - 1] / diff[i], 3.0) << mesh::element_name(c.type) << " refinement "
+                                                  << i << ": " << diff[i - 1] << " -> " << diff[i];
         }
         EXPECT_LT(diff.back(), 0.01 * last_incompatible);
     }
@@ -273,9 +253,8 @@ TEST(IncompatibleFormulation, NamesAndElementTypes) {
                                             Eigen::Vector3d(1, 1, 1), Eigen::Vector3i(1, 1, 1));
     const material::ElementMaterials mats =
         material::uniform(tets, material::isotropic(3, 1.0, 0.3, 1.0));
-    test::expect_error(
-        [&] { fem::stiffness_matrix(tets, mats, fem::Formulation::Incompatible); },
-        "fem.formulation \"incompatible\" does not apply to tet elements");
+    test::expect_error([&] { fem::stiffness_matrix(tets, mats, fem::Formulation::Incompatible); },
+                       "fem.formulation \"incompatible\" does not apply to tet elements");
     test::expect_error(
         [&] {
             fem::element_stiffness(ElementType::Tri3, Matrix::Identity(3, 2),

@@ -34,28 +34,13 @@ TEST_P(PatchTest, LinearFieldIsReproduced) {
         anisotropic ? material::anisotropic(dim, test::random_spd_tensor(mandel_size(dim), 9), 1)
                     : material::isotropic(dim, 2.0, 0.3, 1);
     const material::ElementMaterials mats = material::uniform(m, mat);
-    Matrix A(dim, dim);
-    A.setRandom();
-    A *= 1e-3;
-    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(dim, 1e-3, -2e-3);
-    const Vector exact = test::linear_field(m.rest_positions, A, b);
-
-    fem::Dirichlet bc;
-    for (const Index v : test::box_boundary_nodes(m))
-        bc.fix_nodes({v}, exact.segment(dim * v, dim));
+    const auto [A, exact, bc] = test::affine_patch(m);
     ASSERT_LT(static_cast<Index>(bc.dofs.size()), m.num_dofs());  // there is an interior
     const SparseMatrix K = fem::stiffness_matrix(m, mats);
     const Vector u = test::solve_dirichlet(K, Vector::Zero(m.num_dofs()), bc);
     EXPECT_LT((u - exact).lpNorm<Eigen::Infinity>(), 1e-10 * exact.lpNorm<Eigen::Infinity>());
 
-    const Matrix eps = 0.5 * (A + A.transpose());
-    Eigen::VectorXd e(mandel_size(dim));
-    if (dim == 2) {
-        e << eps(0, 0), eps(1, 1), kSqrt2 * eps(0, 1);
-    } else {
-        e << eps(0, 0), eps(1, 1), eps(2, 2), kSqrt2 * eps(1, 2), kSqrt2 * eps(0, 2),
-            kSqrt2 * eps(0, 1);
-    }
+    const Eigen::VectorXd e = test::mandel_strain(A);
     const fem::ElementStress s = fem::element_stress(m, mats, u);
     const Eigen::VectorXd sigma = material::tensor(mat, dim) * e;
     for (Index el = 0; el < m.num_elements(); ++el) {

@@ -112,8 +112,9 @@ TEST(CoarseConditions, CoarseMeshLargerThanTheObjectCoarsens) {
         EXPECT_GT(larger.energy_rel, fitting.energy_rel / 1.5);
         const Vector u_c = coarsen::solve_coarse(m, {}).u_fine;
         for (const Index dof : large.fine.bc.dofs) EXPECT_NEAR(u_c[dof], 0.0, 1e-12 * u_c.norm());
-        if (method == "effective-tensor")
+        if (method == "effective-tensor") {
             EXPECT_NEAR(sideways.compliance_ratio, fitting.compliance_ratio, 0.1);
+        }
     }
 }
 
