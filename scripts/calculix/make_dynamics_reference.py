@@ -364,12 +364,7 @@ def record(p, version, solver, probes, eig, table, modes, times, u, v):
         "material_field": p["field"],
         "materials": {str(k): val for k, val in ref.MATERIALS.items()},
         "gravity": ref.GRAVITY,
-        "pressure": {"value": ref.PRESSURE, "traction": "-p n, n the outward normal",
-                     "box": {"min": p["load_box"][0], "max": p["load_box"][1]},
-                     "faces": [[e, f] for e, f in p["faces"]],
-                     "faces_note": "[element (0-based), ccx face number]"},
-        "dirichlet": {"box": {"min": p["fixed_box"][0], "max": p["fixed_box"][1]},
-                      "nodes": p["fixed"].tolist(), "value": [0.0, 0.0, 0.0]},
+        **ref.conditions_record(p),
         "frequency": {
             "note": "K phi = omega^2 M phi on the free DOFs, consistent mass, no loads; "
                     "eigenvalues omega^2 (1/time^2) to full double precision (ccx .eig file); "

@@ -160,12 +160,7 @@ def main():
             "grid": {"min": ref.LO, "max": ref.HI, "cells": ref.CELLS},
             "distorted": distort,
             "gravity": p["gravity"],
-            "pressure": {"value": ref.PRESSURE, "traction": "-p n, n the outward normal",
-                         "box": {"min": p["load_box"][0], "max": p["load_box"][1]},
-                         "faces": [[e, f] for e, f in p["faces"]],
-                         "faces_note": "[element (0-based), ccx face number]"},
-            "dirichlet": {"box": {"min": p["fixed_box"][0], "max": p["fixed_box"][1]},
-                          "nodes": p["fixed"].tolist(), "value": [0.0, 0.0, 0.0]},
+            **ref.conditions_record(p),
         }
         desc = ("heterogeneous box (nu = 0.3 / 0.4999) clamped at x = 0 under gravity and a "
                 "pressure on x = 2, C3D8I" + (", interior nodes moved randomly" if distort else ""))

@@ -259,6 +259,18 @@ def prepare(description, prefix):
     return args, version, workdir
 
 
+
+def conditions_record(p):
+    """The "pressure" and "dirichlet" entries of a stored 3D problem p (prepare's result)."""
+    return {
+        "pressure": {"value": PRESSURE, "traction": "-p n, n the outward normal",
+                     "box": {"min": p["load_box"][0], "max": p["load_box"][1]},
+                     "faces": [[e, f] for e, f in p["faces"]],
+                     "faces_note": "[element (0-based), ccx face number]"},
+        "dirichlet": {"box": {"min": p["fixed_box"][0], "max": p["fixed_box"][1]},
+                      "nodes": p["fixed"].tolist(), "value": [0.0, 0.0, 0.0]},
+    }
+
 def main():
     args, version, workdir = prepare(__doc__.split("\n")[0], "ccx_ref_")
     for element in ("hex", "tet"):
@@ -283,12 +295,7 @@ def main():
             "material_field": p["field"],
             "materials": {str(k): v for k, v in MATERIALS.items()},
             "gravity": GRAVITY,
-            "pressure": {"value": PRESSURE, "traction": "-p n, n the outward normal",
-                         "box": {"min": p["load_box"][0], "max": p["load_box"][1]},
-                         "faces": [[e, f] for e, f in p["faces"]],
-                         "faces_note": "[element (0-based), ccx face number]"},
-            "dirichlet": {"box": {"min": p["fixed_box"][0], "max": p["fixed_box"][1]},
-                          "nodes": p["fixed"].tolist(), "value": [0.0, 0.0, 0.0]},
+            **conditions_record(p),
             "displacements": u.tolist(),
         }
         path = os.path.join(args.out, element + ".json")
