@@ -51,6 +51,7 @@ nlohmann::json options_json(const mra::Options& o) {
             {"patch_clip", o.patch_clip},
             {"localization", mra::localization_name(o.localization)},
             {"measurement", mra::measurement_name(o.measurement)},
+            {"operator", mra::operator_name(o.fine_operator)},
             {"defect_tolerance", o.defect_tolerance},
             {"max_radius", o.max_radius}};
 }

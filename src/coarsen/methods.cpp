@@ -86,7 +86,9 @@ bool uses_fine_factorization(const scene::Scene& scene, const scene::FineModel& 
             return scene.coarse.homogenize.mixed_boundary && mesh::is_simplex(fine.mesh.type);
         if (!is_hierarchy(method) || free_dofs > scene.coarse.mra_compare.max_spectrum_dofs)
             return false;
-        const mra::DirichletTreatment t = hierarchy_options(scene, method).dirichlet;
+        const mra::Options o = hierarchy_options(scene, method);
+        if (o.fine_operator == mra::Operator::Step) return false;  // no level diagnostics
+        const mra::DirichletTreatment t = o.dirichlet;
         return t != mra::DirichletTreatment::Penalty &&
                t != mra::DirichletTreatment::DiagonalPenalty;
     });
@@ -96,10 +98,11 @@ CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel
                                const std::string& method,
                                const solve::SpdSolver* fine_factorization) {
     validate_method(scene, method);
-    CoarseModel m = is_hierarchy(method)
-                        ? mra::build_coarse_model(hierarchy_options(scene, method),
-                                                  scene.coarse.mra_compare, fine)
-                        : homogenize::build_coarse_model(scene, fine, method, fine_factorization);
+    CoarseModel m =
+        is_hierarchy(method)
+            ? mra::build_coarse_model(hierarchy_options(scene, method), scene.coarse.mra_compare,
+                                      fine, scene.dynamics ? &*scene.dynamics : nullptr)
+            : homogenize::build_coarse_model(scene, fine, method, fine_factorization);
     m.method = method;
     return m;
 }

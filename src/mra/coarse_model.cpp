@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/stress.hpp"
 #include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/mra/cell_tensors.hpp"
@@ -142,7 +143,7 @@ double density(const M& m, std::int64_t nonzeros) {
 }  // namespace
 
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierarchy,
-                                  const Vector& f_fine) {
+                                  const Vector& f_fine, const SparseMatrix* K_fine) {
     const Hierarchy& h = *hierarchy;
     const Level& L1 = h.level(1);
     const int dim = h.dim;
@@ -167,7 +168,8 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
         for (Index i = 0; i < L1.dofs.size(); ++i) t.emplace_back(L1.dofs[i], i, s[i]);
         P.setFromTriplets(t.begin(), t.end());
     }
-    m.K = P * symmetric_from_lower(L1.A) * SparseMatrix(P.transpose());
+    m.K = P * (K_fine ? galerkin_operator(h, *K_fine, 1) : symmetric_from_lower(L1.A)) *
+          SparseMatrix(P.transpose());
     m.K.makeCompressed();
     m.f = P * coarse_grain(h, f_fine, 1);
     m.to_fine = coarsen::FineMap(h.fine_grid_dofs(), n,
@@ -257,19 +259,36 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
 }
 
 coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOptions& compare,
-                                        const scene::FineModel& fine) {
+                                        const scene::FineModel& fine,
+                                        const sim::DynamicsOptions* dynamics) {
     for (std::size_t k = 0; k < fine.bc.dofs.size(); ++k)
         CG_VERIFY(fine.bc.values[static_cast<Index>(k)] == 0.0,
                   "mra: only zero prescribed displacements are supported, but DOF {} is "
                   "prescribed {}",
                   fine.bc.dofs[k], fine.bc.values[static_cast<Index>(k)]);
+    if (options.fine_operator == Operator::Stiffness) {
+        const auto h = std::make_shared<const Hierarchy>(
+            build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
+        coarsen::CoarseModel m = coarse_model(h, fine.f);
+        m.compare_with_fine = [h, compare](const scene::Scene&, const scene::FineModel& f,
+                                           const scene::StaticSolution& u) {
+            return compare_levels(*h, f, u, compare);
+        };
+        return m;
+    }
+    CG_VERIFY(dynamics != nullptr,
+              "mra: operator \"step\" needs the dynamics options that define the step");
+    Timings timings;
+    SparseMatrix S;
+    {
+        const Phase phase("step operator", &timings);
+        S = sim::step_operator(fine.K, fem::mass_matrix(fine.mesh, fine.materials, dynamics->mass),
+                               *dynamics);
+    }
     const auto h = std::make_shared<const Hierarchy>(
-        build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
-    coarsen::CoarseModel m = coarse_model(h, fine.f);
-    m.compare_with_fine = [h, compare](const scene::Scene&, const scene::FineModel& f,
-                                       const scene::StaticSolution& u) {
-        return compare_levels(*h, f, u, compare);
-    };
+        build_hierarchy(fine.mesh, S, fine.bc.dofs, options, &fine.materials));
+    coarsen::CoarseModel m = coarse_model(h, fine.f, &fine.K);
+    for (const auto& [phase, seconds] : timings.entries()) m.timings.add(phase, seconds);
     return m;
 }
 

@@ -90,6 +90,8 @@ std::string dirichlet_name(DirichletTreatment t) {
     return "?";
 }
 
+std::string operator_name(Operator o) { return o == Operator::Stiffness ? "stiffness" : "step"; }
+
 std::string radius_grid_name(RadiusGrid g) { return g == RadiusGrid::Fine ? "fine" : "coarse"; }
 
 std::string localization_name(Localization l) { return l == Localization::Node ? "node" : "cell"; }
@@ -182,6 +184,9 @@ void validate(const Options& options) {
                   "mra: cell localization needs the eliminate, constrain or ignore Dirichlet "
                   "treatment (the penalty is not part of the element matrices), got {}",
                   dirichlet_name(options.dirichlet));
+        CG_VERIFY(options.fine_operator == Operator::Stiffness,
+                  "mra: cell localization needs operator \"stiffness\" (its parts are the "
+                  "element stiffness matrices, not those of a time step)");
     }
     CG_VERIFY(options.truncation >= 0 && options.truncation < 1,
               "mra: truncation = {} must be in [0, 1)", options.truncation);

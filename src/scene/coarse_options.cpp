@@ -74,6 +74,9 @@ mra::Options parse_mra(const JsonReader& r) {
     if (auto v = r.find("measurement"))
         o.measurement = parse_choice(*v, {"canonical", "stiffness"}) == 0 ? Measurement::Canonical
                                                                           : Measurement::Stiffness;
+    if (auto v = r.find("operator"))
+        o.fine_operator =
+            parse_choice(*v, {"stiffness", "step"}) == 0 ? Operator::Stiffness : Operator::Step;
     if (auto v = r.find("defect_tolerance")) {
         o.defect_tolerance = v->number();
         v->fail_unless(o.defect_tolerance >= 0, "expected a number >= 0 (0: fixed radius), got {}",
@@ -116,7 +119,7 @@ CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::stri
     // One list for every method, so that one scene can be coarsened by each of them.
     r.allow_only({"mesh", "normals", "boundary", "map", "mass", "levels", "refinement", "radius",
                   "radius_grid", "patch", "patch_clip", "truncation", "invariance", "dirichlet",
-                  "spectrum_max_dofs", "cell_tensors", "localization", "measurement",
+                  "spectrum_max_dofs", "cell_tensors", "localization", "measurement", "operator",
                   "defect_tolerance", "max_radius", "boundary_blind"});
     o.homogenize = parse_homogenize(r);
     o.hierarchy = r.has("levels");

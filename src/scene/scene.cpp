@@ -320,6 +320,13 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     }
     if (auto c = root.find("coarse")) s.coarse = parse_coarse_options(c->json(), s.source);
     if (auto d = root.find("dynamics")) s.dynamics = parse_dynamics_options(d->json(), s.source);
+    if (s.coarse.mra.fine_operator == mra::Operator::Step)
+        root.at("coarse")
+            .at("operator")
+            .fail_unless(
+                s.dynamics.has_value(),
+                "\"step\" adapts the hierarchy to one time step, which the scene's \"dynamics\" "
+                "block defines (dt, integrator, damping, mass); add one or use \"stiffness\"");
 
     std::map<int, material::Material> carried;
     s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir, &carried);

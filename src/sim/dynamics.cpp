@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <optional>
 
 #include "coarsegrain/common/error.hpp"
@@ -18,6 +19,31 @@ std::pair<double, double> step_weights(const DynamicsOptions& o) {
     const double dt = o.dt;
     return o.integrator == Integrator::Midpoint ? std::pair{dt / 2, dt * dt / 4}
                                                 : std::pair{dt, dt * dt};
+}
+
+void check_sizes(const SparseMatrix& K, const SparseMatrix& M) {
+    CG_VERIFY(K.rows() == K.cols() && M.rows() == M.cols() && K.rows() == M.rows(),
+              "time stepping: stiffness {}x{} and mass {}x{} must be square of one size", K.rows(),
+              K.cols(), M.rows(), M.cols());
+}
+
+/// The DOFs of an n-DOF model that bc does not prescribe, ascending.
+IndexVector free_dofs(Index n, const fem::Dirichlet& bc) {
+    CG_VERIFY(static_cast<Index>(bc.dofs.size()) <= n,
+              "time stepping: {} Dirichlet DOFs for {} DOFs", bc.dofs.size(), n);
+    IndexVector free(n - static_cast<Index>(bc.dofs.size()));
+    Index next = 0;
+    auto fixed = bc.dofs.begin();
+    for (Index i = 0; i < n; ++i) {
+        if (fixed != bc.dofs.end() && *fixed == i) {
+            ++fixed;
+            continue;
+        }
+        CG_VERIFY(next < free.size(), "time stepping: Dirichlet DOFs not sorted, unique, < {}", n);
+        free[next++] = i;
+    }
+    CG_VERIFY(next == free.size(), "time stepping: Dirichlet DOFs not sorted, unique, < {}", n);
+    return free;
 }
 
 Vector restrict_to(const Vector& x, const IndexVector& dofs) {
@@ -66,20 +92,43 @@ void validate(const DynamicsOptions& o) {
     CG_VERIFY(o.initial_velocity.allFinite(), "dynamics.initial_velocity: expected finite numbers");
 }
 
-TimeStepper::TimeStepper(const SparseMatrix& K, const SparseMatrix& M, const fem::Dirichlet& bc,
-                         const DynamicsOptions& options, const solve::SolverOptions& solver)
-    : m_K(K), m_M(M), m_options(options), m_solver(solver) {
+SparseMatrix step_operator(const SparseMatrix& K, const SparseMatrix& M,
+                           const DynamicsOptions& options) {
     validate(options);
-    CG_VERIFY(K.rows() == K.cols() && M.rows() == M.cols() && K.rows() == M.rows(),
-              "time stepping: stiffness {}x{} and mass {}x{} must be square of one size", K.rows(),
-              K.cols(), M.rows(), M.cols());
+    check_sizes(K, M);
     const auto [cC, cK] = step_weights(options);
     // S = M + c_C (α M + β K) + c_K K
-    const SparseMatrix S =
+    SparseMatrix S =
         (1 + cC * options.rayleigh_mass) * M + (cK + cC * options.rayleigh_stiffness) * K;
-    const fem::ReducedSystem sys = fem::reduce(S, Vector::Zero(S.rows()), bc);
-    m_free = sys.free_dofs;
-    m_solver.compute(sys.K);
+    S.makeCompressed();
+    return S;
+}
+
+TimeStepper::TimeStepper(const SparseMatrix& K, const SparseMatrix& M, const fem::Dirichlet& bc,
+                         const DynamicsOptions& options, const solve::SolverOptions& solver)
+    : m_K(K), m_M(M), m_options(options) {
+    const SparseMatrix S = step_operator(K, M, options);
+    fem::ReducedSystem sys = fem::reduce(S, Vector::Zero(S.rows()), bc);
+    m_free = std::move(sys.free_dofs);
+    auto factorization = std::make_shared<solve::SpdSolver>(solver);
+    factorization->compute(sys.K);
+    m_solve = [factorization, free = m_free](const Vector& r) {
+        return factorization->solve(restrict_to(r, free));
+    };
+}
+
+TimeStepper::TimeStepper(const SparseMatrix& K, const SparseMatrix& M, const fem::Dirichlet& bc,
+                         const DynamicsOptions& options, StepSolve solve)
+    : m_K(K), m_M(M), m_options(options) {
+    validate(options);
+    check_sizes(K, M);
+    m_free = free_dofs(K.rows(), bc);
+    m_solve = [solve = std::move(solve), free = m_free, n = K.rows()](const Vector& r) {
+        const Vector x = solve(r);
+        CG_VERIFY(x.size() == n, "time stepping: the step solve returned {} entries, not {}",
+                  x.size(), n);
+        return restrict_to(x, free);
+    };
 }
 
 void TimeStepper::step(State& s, const Vector& f) const {
@@ -91,7 +140,7 @@ void TimeStepper::step(State& s, const Vector& f) const {
     // The damping terms cancel from both right-hand sides (midpoint: S v + (M - c_C C - c_K K) v
     // = 2 M v; implicit Euler has none), so only S carries C.
     const Vector rhs = (midpoint ? 2.0 : 1.0) * (m_M * s.v) + dt * (f - m_K * s.u);
-    const Vector x = m_solver.solve(restrict_to(rhs, m_free));
+    const Vector x = m_solve(rhs);
     if (midpoint) {  // x = w = v + v' on the free DOFs
         for (Index i = 0; i < m_free.size(); ++i) {
             const Index d = m_free[i];

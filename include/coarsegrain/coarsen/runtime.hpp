@@ -62,9 +62,9 @@ void validate_method(const scene::Scene& scene, const std::string& method);
 /// fine stiffness without the Dirichlet DOFs), so that scene::solve_static should keep it
 /// (StaticSolution::factorization, for build_coarse_model and CompareWithFine). True with a
 /// direct solver (cholmod, ldlt) if one of the methods factorizes K_ff itself:
-/// - an mra method whose diagnostics compute the spectrum of the fine operator, which is K_ff
-///   for every Dirichlet treatment but the penalties (they factorize their own), i.e. if K_ff
-///   has at most coarse.spectrum_max_dofs rows;
+/// - an mra method adapted to the stiffness whose diagnostics compute the spectrum of the fine
+///   operator, which is K_ff for every Dirichlet treatment but the penalties (they factorize
+///   their own), i.e. if K_ff has at most coarse.spectrum_max_dofs rows;
 /// - the effective tensors' harmonic solve with coarse.boundary "mixed" on a simplicial fine
 ///   mesh (on a hex or quad mesh it solves on the mesh split into simplices, another operator;
 ///   the pure-Neumann one pins other DOFs).

@@ -7,6 +7,7 @@
 #include "coarsegrain/mra/diagnostics.hpp"
 #include "coarsegrain/mra/hierarchy.hpp"
 #include "coarsegrain/scene/scene.hpp"
+#include "coarsegrain/sim/dynamics.hpp"
 
 namespace coarsegrain::mra {
 
@@ -21,7 +22,11 @@ namespace coarsegrain::mra {
 /// options, per level k < q nodes, dofs, wavelets, radius, build_seconds, nnz and density of C̃,
 /// A and B, and the fine level's cells, nodes and nonzeros of A^q; `timings` the phases of h.
 /// to_fine keeps h and applies Φ^{1,T} level by level (reconstruct) without forming Φ^1.
-coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, const Vector& f_fine);
+/// `K_fine` (fine grid DOFs square) is given when h is adapted to another operator than the
+/// stiffness (Operator::Step): then K = S Φ^1 K_fine Φ^{1,T} S (galerkin_operator) instead of
+/// S A^1 S.
+coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, const Vector& f_fine,
+                                  const SparseMatrix* K_fine = nullptr);
 
 /// Cell tensors (cell_tensors.hpp) are computed only for coarsest grids of at most this many
 /// cells (one small free-body hierarchy each).
@@ -55,9 +60,15 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
 
 /// Builds the hierarchy of the fine model with `options` and returns the coarsest level as a
 /// CoarseModel (coarse_model) whose compare_with_fine is compare_levels with `compare` (the
-/// hierarchy is kept alive by it).
-/// @throws Error as build_hierarchy (coarsen::validate_method checks the scene beforehand)
+/// hierarchy is kept alive by it). With options.fine_operator Operator::Step the hierarchy is
+/// built on the step operator of `dynamics` (sim::step_operator with the fine mass of
+/// dynamics->mass; phase "step operator" in the model's timings), the model's K is the fine
+/// stiffness through it (coarse_model's K_fine), and there is no compare_with_fine: the levels'
+/// operators are step operators, which the static diagnostics do not apply to.
+/// @throws Error as build_hierarchy (coarsen::validate_method checks the scene beforehand), or
+///         if Operator::Step comes without `dynamics`
 coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOptions& compare,
-                                        const scene::FineModel& fine);
+                                        const scene::FineModel& fine,
+                                        const sim::DynamicsOptions* dynamics = nullptr);
 
 }  // namespace coarsegrain::mra

@@ -73,9 +73,26 @@ enum class Measurement {
     Stiffness,
 };
 
-/// "dirac", "linear" / "eliminate", "penalty", "diagonal_penalty", "constrain", "ignore" / "fine",
-/// "coarse" / "node", "cell" / "canonical", "stiffness".
+/// The fine operator the hierarchy is adapted to (Chen et al. 2019, Secs. 4.1 and 4.2).
+enum class Operator {
+    /// The stiffness K: the basis of elastostatics (Sec. 4.1), which dynamics then uses with the
+    /// Galerkin mass through the same hierarchy.
+    Stiffness,
+    /// The operator of one implicit step of the scene's dynamics, S = M + c_C C + c_K K
+    /// (sim::step_operator: M + dt² K for implicit Euler in velocity form, M + dt²/4 K for
+    /// midpoint, C the Rayleigh damping), the "discrete flow" of Sec. 4.2: the basis is adapted
+    /// to one time step, and the coarse model is K and M through it (Φ K Φᵀ, Φ M Φᵀ), whose step
+    /// operator is exactly the hierarchy's A^1. S depends on dt, the integrator, the damping and
+    /// the mass: each of them needs a new build, at the cost of a stiffness build (the same
+    /// sparsity). As dt grows the basis tends to the stiffness one; as dt shrinks, to a basis
+    /// adapted to the mass alone. Measured: docs/guide.md, "Dynamics".
+    Step,
+};
+
+/// "dirac", "linear" / "stiffness", "step" / "eliminate", "penalty", "diagonal_penalty",
+/// "constrain", "ignore" / "fine", "coarse" / "node", "cell" / "canonical", "stiffness".
 std::string refinement_name(Refinement r);
+std::string operator_name(Operator o);
 std::string dirichlet_name(DirichletTreatment t);
 std::string radius_grid_name(RadiusGrid g);
 std::string localization_name(Localization l);
@@ -121,6 +138,9 @@ struct Options {
     /// patch_clip).
     Localization localization = Localization::Node;
     Measurement measurement = Measurement::Canonical;
+    /// coarse.operator: what the fine operator given to build_hierarchy is. Cell localization
+    /// with a finite radius needs the stiffness (its parts are element stiffness matrices).
+    Operator fine_operator = Operator::Stiffness;
     /// Relative truncation threshold tau >= 0 (0: none). After the solves of step k, the d
     /// entries of a row i of C̃ at the DOFs of one level-(k+1) node j (a row of the paper's d x d
     /// coefficient C̃_ij) are dropped together if all of them are below tau max_l |C̃_il|

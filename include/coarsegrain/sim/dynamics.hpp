@@ -2,6 +2,7 @@
 /// @file Linear elastodynamics M ü + C u̇ + K u = f with Rayleigh damping C = α M + β K, for the
 /// fine model and every coarse model alike: implicit midpoint (Kharevych et al. 2009, Sec. 4.4,
 /// "Time Integration") and implicit Euler (Chen et al. 2019, Sec. 4.2), one factorization per run.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -60,9 +61,20 @@ struct State {
     Vector u, v;
 };
 
-/// Time stepping of one model. The operator of a step, S = M + c_C C + c_K K (midpoint:
-/// c_C = dt/2, c_K = dt²/4; implicit Euler: dt, dt²), restricted to the free DOFs, is factorized
-/// once by the constructor; each step is then two sparse products and one back-substitution:
+/// The operator of one step, S = M + c_C C + c_K K with C = α M + β K (midpoint: c_C = dt/2,
+/// c_K = dt²/4; implicit Euler: dt, dt²), over all DOFs (n x n, both triangles, as K and M):
+/// the matrix of Chen et al. 2019, Sec. 4.2, "L u̇_{t+dt} = u̇_t", for these integrators.
+/// @throws Error if the options are out of range or K and M are not square of one size
+SparseMatrix step_operator(const SparseMatrix& K, const SparseMatrix& M,
+                           const DynamicsOptions& options);
+
+/// A solver of the step operator over all n DOFs: x = solve(r) with S x = r on the free DOFs
+/// (the entries of r at Dirichlet DOFs are ignored, and those of x there are not used).
+using StepSolve = std::function<Vector(const Vector& r)>;
+
+/// Time stepping of one model. The step operator S (step_operator) restricted to the free DOFs
+/// is factorized once by the constructor, or solved by a given StepSolve; each step is then two
+/// sparse products and one solve with S:
 ///   midpoint:        S w = 2 M v + dt (f - K u),   v' = w - v,   u' = u + dt/2 w
 ///   implicit Euler:  S v' = M v + dt (f - K u),    u' = u + dt v'
 /// The damping enters S only: it cancels from both right-hand sides.
@@ -77,6 +89,11 @@ class TimeStepper {
     ///         step operator is not positive definite on the free DOFs
     TimeStepper(const SparseMatrix& K, const SparseMatrix& M, const fem::Dirichlet& bc,
                 const DynamicsOptions& options, const solve::SolverOptions& solver = {});
+    /// As above, with the solves of S by `solve` (e.g. mra::MultilevelSolver on a hierarchy of
+    /// S, Chen et al. 2019, Secs. 3.6 and 4.2) instead of a factorization.
+    /// @throws Error if sizes disagree or options are out of range
+    TimeStepper(const SparseMatrix& K, const SparseMatrix& M, const fem::Dirichlet& bc,
+                const DynamicsOptions& options, StepSolve solve);
     /// Advances `s` by one step under the load f (n entries).
     void step(State& s, const Vector& f) const;
     /// Discrete energy ½ vᵀM v + ½ uᵀK u - fᵀu (kinetic + strain - work of the constant load f).
@@ -88,7 +105,8 @@ class TimeStepper {
     const SparseMatrix& m_M;
     DynamicsOptions m_options;
     IndexVector m_free;
-    solve::SpdSolver m_solver;
+    /// x over the free DOFs for r over all DOFs
+    std::function<Vector(const Vector& r)> m_solve;
 };
 
 /// Saved frames of a run.
