@@ -1,5 +1,5 @@
-// Which coarse mass gets which frequencies right, against the density contrast: prints the table
-// of docs/performance.md ("Coarse mass against density contrast").
+// Which coarse mass gets which frequencies right, against the density contrast: prints the tables
+// of docs/coarse-mass.md.
 //
 //   build/release/bench/bench_coarse_mass
 //

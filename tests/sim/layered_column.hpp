@@ -1,6 +1,6 @@
 #pragma once
 /// @file The layered column of the coarse-mass study (tests/sim/test_coarse_mass_contrast.cpp and
-/// bench/bench_coarse_mass.cpp, which prints the table of docs/performance.md): a 2D bar whose
+/// bench/bench_coarse_mass.cpp, which prints the tables of docs/coarse-mass.md): a 2D bar whose
 /// stiffness is homogeneous and whose density varies along its axis, so that its coarse models
 /// differ only by their coarse mass.
 ///

@@ -1,7 +1,7 @@
 // Coarse masses against the fine model when only the density is heterogeneous, on the layered
 // column of layered_column.hpp: one stiffness, so that every coarse model has the same stiffness
 // PᵀKP and differs from the others by its mass alone. bench/bench_coarse_mass prints the measured
-// table (docs/performance.md, "Coarse mass against density contrast").
+// table (docs/coarse-mass.md).
 #include <gtest/gtest.h>
 
 #include <algorithm>
