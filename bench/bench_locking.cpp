@@ -23,6 +23,7 @@
 // (2D: 64x16, 128x32, 256x64), printed with the same extrapolation of the incompatible element,
 // which agrees within 0.2% up to nu = 0.4999 and fails beyond (it locks mildly there, 3D).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cmath>
 #include <cstring>
@@ -118,11 +119,7 @@ double tip_deflection(int dim, const Variant& v, const std::vector<int>& cells, 
     return -cg::scene::probe_displacements(sc, model.mesh, sol.u).front()[dim - 1];
 }
 
-std::string grid_name(const std::vector<int>& c) {
-    std::string s = std::to_string(c[0]);
-    for (std::size_t i = 1; i < c.size(); ++i) s += "x" + std::to_string(c[i]);
-    return s;
-}
+std::string grid_name(const std::vector<int>& c) { return fmt::format("{}", fmt::join(c, "x")); }
 
 void table(int dim) {
     const std::vector<double> nus = {0.3, 0.45, 0.49, 0.499, 0.4999, 0.49999};
