@@ -125,7 +125,8 @@ int main(int argc, char** argv) {
         "{\"rayleigh\": [alpha, beta]}, \"mass\": \"consistent\"|\"lumped\"}; coarse.mass\n"
         "(lumped|consistent|galerkin) chooses the effective tensors' and baselines' coarse mass.\n"
         "Files: fine.pvd (+ fine/), <method>.pvd (+ <method>/) for ParaView, trajectory.csv,\n"
-        "trajectory.png, summary.json. See docs/guide.md, \"Dynamics\".");
+        "trajectory.png, animation.gif (every model side by side; its data animation_data.bin),\n"
+        "summary.json. See docs/guide.md, \"Dynamics\".");
     CLI::App* modes = app.add_subcommand(
         "modes", "natural frequencies and modes, fine and coarse, paired by MAC");
     modes->add_option("scene", modes_scene, "scene file (JSON)")->required();
