@@ -145,7 +145,8 @@ int main(int argc, char** argv) {
     CLI::App* demo = app.add_subcommand(
         "demo",
         "the built-in scene, a layered beam (stiff/soft, contrast 1000) hung under gravity: fine\n"
-        "solve, every coarsening method, a table and out/demo/report.md with pictures");
+        "solve, every coarsening method, a table and out/demo/report.md with pictures; then the\n"
+        "same models released from rest under gravity and stepped in time (out/demo/dynamics/)");
     demo->add_option("--out", demo_out, "output folder")->capture_default_str();
     demo->add_option("--scale", demo_scale,
                      "grid resolution factor: 1 = 48x12x12 hexes, 0.67 = 32x8x8, 0.33 = 16x4x4\n"
@@ -197,8 +198,7 @@ int main(int argc, char** argv) {
             const cg::scene::Scene sc =
                 cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
             const double read = since_start();
-            failed = cg::app::run_coarsen(sc, cg::coarsen::configured_methods(sc), demo_out, "demo",
-                                          read);
+            failed = cg::app::run_demo(sc, demo_out, read);
         }
     } catch (const cg::Error& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

@@ -479,6 +479,40 @@ std::vector<nlohmann::json> method_entries(const nlohmann::json& summary) {
 
 }  // namespace
 
+nlohmann::json simulate_overview(const nlohmann::json& summary, const std::string& folder) {
+    nlohmann::json methods = nlohmann::json::array();
+    nlohmann::json period = nullptr;
+    for (const nlohmann::json& e : method_entries(summary)) {
+        if (e.contains("error")) {
+            methods.push_back({{"method", e["method"]}, {"error", e["error"]}});
+            continue;
+        }
+        nlohmann::json row = {{"method", e["method"]},
+                              {"coarse", e["coarse"]},
+                              {"speedup", e["speedup"]},
+                              {"errors", e["errors"]}};
+        row["coarse"]["timings"] = e["timings"]["coarse"];
+        methods.push_back(row);
+        if (period.is_null() && !e["errors"]["phase"].empty())
+            period = e["errors"]["phase"][0]["period_fine"];
+    }
+    nlohmann::json plots = nlohmann::json::array();
+    for (const auto& p : summary["plots"]) plots.push_back(folder + "/" + p.get<std::string>());
+    const nlohmann::json& d = summary["dynamics"];
+    return {{"folder", folder},
+            {"integrator", d["integrator"]},
+            {"dt", d["dt"]},
+            {"steps", d["steps"]},
+            {"start", d["start"]},
+            {"fine",
+             {{"dofs", summary["fine"]["dofs"]},
+              {"timings", {{"per_step", summary["fine"]["timings"]["per_step"]}}},
+              {"period", period}}},
+            {"methods", methods},
+            {"failed_methods", summary.value("failed_methods", 0)},
+            {"plots", plots}};
+}
+
 void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary) {
     const sim::DynamicsOptions& o = *sc.dynamics;
     std::printf("coarsegrain simulate: %s, %s, dt %g, %d steps\n", sc.source.c_str(),
@@ -527,6 +561,27 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
     std::printf("  wrote %s/fine.pvd, trajectory.csv, animation.gif and summary.json\n",
                 out_dir.c_str());
     return run.failed;
+}
+
+nlohmann::json simulate_built(const scene::Scene& sc, const scene::FineModel& fine_model,
+                              std::vector<BuiltModel> coarse, const std::string& out_dir,
+                              int& failed) {
+    CG_VERIFY_AS(InvalidScene, sc.dynamics.has_value(), "{}: no \"dynamics\" block", sc.source);
+    io::ensure_writable_dir(out_dir);
+    check_frames_fit(sc, fine_model);
+    FineDynamics fine = with_fine_mass(fine_model, sc.dynamics->mass, {});
+    std::vector<std::string> methods;
+    for (const BuiltModel& m : coarse) methods.push_back(m.method);
+    const auto source = [&](const std::string& method) {
+        const auto it = std::find_if(coarse.begin(), coarse.end(),
+                                     [&](const BuiltModel& m) { return m.method == method; });
+        // Each model is stepped once: it moves into the run (and is freed after it).
+        return with_mass(std::move(it->model), fine, sc.source, method);
+    };
+    SimulateRun run = simulate_models(sc, fine, methods, source, out_dir, false);
+    write_summary(out_dir, run.summary);
+    failed += run.failed;
+    return run.summary;
 }
 
 int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, int count,

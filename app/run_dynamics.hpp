@@ -31,7 +31,35 @@ namespace coarsegrain::app {
 int run_simulate(const scene::Scene& scene, const std::vector<std::string>& methods,
                  const std::string& out_dir, double read_seconds);
 
-/// The table of a run's summary (run_simulate) on stdout: per model its DOFs,
+/// A coarse model built beforehand (by a static comparison) for the method named.
+struct BuiltModel {
+    std::string method;
+    coarsen::CoarseModel model;
+};
+
+/// The dynamic run of `coarsegrain demo`: run_simulate's stepping, comparison and files on models
+/// already built, the fine model (its mass is computed here; it must outlive the call) and the
+/// coarse models of the static comparison, which move into the run (each is freed once
+/// stepped). Writes every file of run_simulate to `out_dir` but the ParaView series and returns
+/// its summary (also written as out_dir/summary.json); print_simulate_table prints its table.
+/// @param[in,out] failed  incremented by the methods whose run failed (reported as run_simulate)
+/// @throws InvalidScene if the scene has no "dynamics" block; Error if the frames would not fit
+///         in memory or the folder cannot be written
+nlohmann::json simulate_built(const scene::Scene& scene, const scene::FineModel& fine,
+                              std::vector<BuiltModel> coarse, const std::string& out_dir,
+                              int& failed);
+
+/// A run's figures for a report (the demo's summary.json "dynamics" and report.md): "folder",
+/// "integrator", "dt", "steps", "start", "fine" {"dofs", "timings" {"per_step"}, "period": the
+/// first probe's fine period or null}, "methods" (each method's entry of the summary without
+/// its probe series and fine timings: "method", "coarse" {"dofs", "timings"}, "speedup",
+/// "errors" {"trajectory_l2_rel", "probe_max_rel", "phase"}; or "method" and "error"),
+/// "failed_methods", and "plots" (the pictures made, as paths below `folder`'s parent).
+/// @param summary  the run's summary (simulate_built)
+/// @param folder   the run's folder, relative to the report's
+nlohmann::json simulate_overview(const nlohmann::json& summary, const std::string& folder);
+
+/// The table of a run's summary (run_simulate, simulate_built) on stdout: per model its DOFs,
 /// factorization and per-step seconds, per-step speedup, trajectory error and the lag of the
 /// first probe (errors.phase[0].lag, "-" if null).
 void print_simulate_table(const scene::Scene& scene, const nlohmann::json& summary);

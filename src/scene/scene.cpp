@@ -694,6 +694,7 @@ json demo_scene(double scale) {
           {"levels", 3},
           {"cell_tensors", false},
           {"spectrum_max_dofs", 0}}},
+        {"dynamics", {{"integrator", "midpoint"}, {"dt", 0.01}, {"steps", 110}, {"start", "rest"}}},
     };
 }
 
