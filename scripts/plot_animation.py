@@ -18,6 +18,7 @@ face_size.
 """
 import json
 import math
+import os
 import sys
 
 import numpy as np
@@ -95,8 +96,10 @@ class Panel:
             self.xy = np.zeros((len(faces), faces.shape[1], 2))
             paths = [Path(v, closed=False) for v in self.xy]
             self.shared = np.shares_memory(paths[0].vertices, self.xy)
-            self.artist = PathCollection(paths, cmap=cmap, norm=norm, edgecolors="face",
-                                         linewidths=0.3, antialiased=False)
+            # Without antialiasing neighbouring polygons leave no seams between them, and the
+            # flat colours compress well in the GIF.
+            self.artist = PathCollection(paths, cmap=cmap, norm=norm, edgecolors="none",
+                                         linewidths=0, antialiased=False)
             ax.add_collection(self.artist)
         else:
             self.artist = ax.scatter(rest[:, 0], rest[:, 1], c=np.zeros(len(rest)), cmap=cmap,
@@ -130,7 +133,8 @@ def draw(header, rest, faces, frames, out):
     cols, rows, width = layout(len(models), aspect)
     height = width / aspect
     title_h, top_h, bar_w = 0.3, 0.75, 1.3
-    fig_w, fig_h = cols * width + bar_w, rows * (height + title_h) + top_h
+    # At least 7 inches wide, for the title lines.
+    fig_w, fig_h = max(cols * width + bar_w, 7.0), rows * (height + title_h) + top_h
     fig = plt.figure(figsize=(fig_w, fig_h), dpi=80)
     norm = colors.Normalize(0.0, max(float(frames[..., 2].max()), 1e-30))
     cmap = plt.get_cmap("viridis")
@@ -151,8 +155,8 @@ def draw(header, rest, faces, frames, out):
     axes = "-".join(header["axes"])
     view = f"{axes} plane" + (f" (looking along {header['dropped']})" if header["dropped"] else "")
     shown = "true scale" if scale == 1 else f"displacement drawn x{scale:.3g}"
-    fig.text(0.01, 1 - 0.28 / fig_h, f"{header.get('scene', '')}: {view}, {shown}", fontsize=11,
-             va="center")
+    scene = os.path.basename(header.get("scene", ""))
+    fig.text(0.01, 1 - 0.28 / fig_h, f"{scene}: {view}, {shown}", fontsize=11, va="center")
     clock = fig.text(0.01, 1 - 0.55 / fig_h, "", fontsize=11, va="center", family="monospace")
 
     # Everything but the bodies and the clock is drawn once; each frame draws those over it.

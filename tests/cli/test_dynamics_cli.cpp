@@ -169,6 +169,31 @@ TEST(CliSimulate, AnimationShowsSixtyFramesOfTheFacingSurface) {
     EXPECT_EQ(gif.frames, 60);
 }
 
+// A 2D body is drawn in its own plane, every element a polygon; above 4000 polygons only their
+// nodes are drawn, at most 4000 of them.
+TEST(CliSimulate, AnimationOfALarge2dMeshDrawsPoints) {
+    const std::string dir = temp_dir("cli_simulate_animation_2d");
+    const json j = json::parse(R"({
+      "dimension": 2,
+      "mesh": { "grid": { "min": [0,0], "max": [2,1], "cells": [80,60], "element": "quad" } },
+      "materials": { "0": { "E": 1000, "nu": 0.3, "density": 1 } },
+      "dirichlet": [ { "box": { "min": [-1e-9,-1], "max": [1e-9,2] } } ],
+      "loads": { "gravity": [0,-1] },
+      "dynamics": { "dt": 0.02, "steps": 10 }
+    })");
+    const Result r = cli("simulate " + write_scene(dir, j) + " --out " + dir + "/out");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const json h = animation_header(dir + "/out/animation_data.bin");
+    EXPECT_EQ(h["axes"], json({"x", "y"}));
+    EXPECT_TRUE(h["dropped"].is_null());
+    EXPECT_EQ(h["faces"], 0);  // 4800 elements
+    EXPECT_LE(h["points"].get<int>(), 4000);
+    EXPECT_GE(h["points"].get<int>(), 2000);  // 81 x 61 = 4941 nodes, every second one
+    const GifInfo gif = read_gif(dir + "/out/animation.gif");
+    EXPECT_EQ(gif.error, "");
+    EXPECT_EQ(gif.frames, 11);
+}
+
 // Without a usable Python the run succeeds, keeps the animation's data and says how to make it.
 TEST(CliSimulate, WithoutPythonTheRunSucceedsWithoutTheGif) {
     const std::string dir = temp_dir("cli_simulate_no_python");
