@@ -358,7 +358,7 @@ int run_demo(const scene::Scene& sc, const std::string& out_dir, double read_sec
                                                    (dir / kDemoDynamicsFolder).string(), failed);
     const nlohmann::json overview = simulate_overview(dynamics, kDemoDynamicsFolder);
     failed += finish_comparison(sc, "demo", c, dir, &overview);
-    print_simulate_table(sc, dynamics);
+    print_simulate_table(sc, dynamics, "coarsegrain demo, released from rest");
     std::printf(
         "  wrote %s/report.md, summary.json, solution_fine.vtu, a folder per method and %s/ "
         "(peak memory %.0f MB)\n",

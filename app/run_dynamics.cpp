@@ -513,9 +513,10 @@ nlohmann::json simulate_overview(const nlohmann::json& summary, const std::strin
             {"plots", plots}};
 }
 
-void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary) {
+void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
+                          const std::string& command) {
     const sim::DynamicsOptions& o = *sc.dynamics;
-    std::printf("coarsegrain simulate: %s, %s, dt %g, %d steps\n", sc.source.c_str(),
+    std::printf("%s: %s, %s, dt %g, %d steps\n", command.c_str(), sc.source.c_str(),
                 sim::integrator_name(o.integrator).c_str(), o.dt, o.steps);
     std::printf("  %-20s %9s %12s %12s %10s %12s %10s\n", "model", "DOFs", "factorize s",
                 "per step s", "speedup", "traj. l2", "lag p0");

@@ -59,10 +59,12 @@ nlohmann::json simulate_built(const scene::Scene& scene, const scene::FineModel&
 /// @param folder   the run's folder, relative to the report's
 nlohmann::json simulate_overview(const nlohmann::json& summary, const std::string& folder);
 
-/// The table of a run's summary (run_simulate, simulate_built) on stdout: per model its DOFs,
-/// factorization and per-step seconds, per-step speedup, trajectory error and the lag of the
-/// first probe (errors.phase[0].lag, "-" if null).
-void print_simulate_table(const scene::Scene& scene, const nlohmann::json& summary);
+/// The table of a run's summary (run_simulate, simulate_built) on stdout under the heading
+/// "<command>: <scene>, <integrator>, dt, steps": per model its DOFs, factorization and per-step
+/// seconds, per-step speedup, trajectory error and the lag of the first probe
+/// (errors.phase[0].lag, "-" if null).
+void print_simulate_table(const scene::Scene& scene, const nlohmann::json& summary,
+                          const std::string& command = "coarsegrain simulate");
 
 /// `coarsegrain modes`: the `count` lowest natural frequencies and modes of the fine model and
 /// of each method's coarse model (K φ = ω² M φ; the fine mass is dynamics.mass, consistent
