@@ -125,7 +125,8 @@ int main(int argc, char** argv) {
         "{\"rayleigh\": [alpha, beta]}, \"mass\": \"consistent\"|\"lumped\"}; coarse.mass\n"
         "(lumped|consistent|galerkin) chooses the effective tensors' and baselines' coarse mass.\n"
         "Files: fine.pvd (+ fine/), <method>.pvd (+ <method>/) for ParaView, trajectory.csv,\n"
-        "trajectory.png, summary.json. See docs/guide.md, \"Dynamics\".");
+        "trajectory.png, animation.gif (every model side by side; its data animation_data.bin),\n"
+        "summary.json. See docs/guide.md, \"Dynamics\".");
     CLI::App* modes = app.add_subcommand(
         "modes", "natural frequencies and modes, fine and coarse, paired by MAC");
     modes->add_option("scene", modes_scene, "scene file (JSON)")->required();
@@ -144,7 +145,8 @@ int main(int argc, char** argv) {
     CLI::App* demo = app.add_subcommand(
         "demo",
         "the built-in scene, a layered beam (stiff/soft, contrast 1000) hung under gravity: fine\n"
-        "solve, every coarsening method, a table and out/demo/report.md with pictures");
+        "solve, every coarsening method, a table and out/demo/report.md with pictures; then the\n"
+        "same models released from rest under gravity and stepped in time (out/demo/dynamics/)");
     demo->add_option("--out", demo_out, "output folder")->capture_default_str();
     demo->add_option("--scale", demo_scale,
                      "grid resolution factor: 1 = 48x12x12 hexes, 0.67 = 32x8x8, 0.33 = 16x4x4\n"
@@ -196,8 +198,7 @@ int main(int argc, char** argv) {
             const cg::scene::Scene sc =
                 cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
             const double read = since_start();
-            failed = cg::app::run_coarsen(sc, cg::coarsen::configured_methods(sc), demo_out, "demo",
-                                          read);
+            failed = cg::app::run_demo(sc, demo_out, read);
         }
     } catch (const cg::Error& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

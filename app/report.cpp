@@ -72,12 +72,12 @@ void write_report_data(const scene::Scene& sc, const FineRun& f,
     for (const MethodResult& r : results)
         if (r.failure.empty())
             methods.push_back({{"method", r.method},
-                           {"dofs", r.dofs},
-                           {"build_seconds", r.build_seconds},
-                           {"solve_seconds", r.factorize_and_solve},
-                           {"speedup", r.speedup},
-                           {"errors", errors_row(r.errors)},
-                           {"u", surface_displacements(s, r.u_fine, dim)}});
+                               {"dofs", r.dofs},
+                               {"build_seconds", r.build_seconds},
+                               {"solve_seconds", r.factorize_and_solve},
+                               {"speedup", r.speedup},
+                               {"errors", errors_row(r.errors)},
+                               {"u", surface_displacements(s, r.u_fine, dim)}});
     const nlohmann::json data = {
         {"scene", sc.source},
         {"dimension", dim},
@@ -127,8 +127,72 @@ std::string picture(const nlohmann::json& made, const std::string& file, const s
     return fmt::format("## {}\n\n![{}]({})\n\n{}\n\n", title, title, file, caption);
 }
 
+/// A figure of the dynamics table: the number, or "-" for null.
+std::string figure(const nlohmann::json& v, const char* format) {
+    return v.is_null() ? "-" : fmt::format(fmt::runtime(format), v.get<double>());
+}
+
+/// The dynamic run's section of report.md, from its overview (simulate_overview).
+std::string dynamics_markdown(const nlohmann::json& d) {
+    const std::string folder = d["folder"];
+    std::string md = fmt::format(
+        "## Dynamics: released from rest under the loads\n\n"
+        "The same fine model and the same coarse models (built once, for the table above), "
+        "released from rest with the loads switched on at t = 0 and stepped by {} with dt = {} for "
+        "{} steps. Every saved frame of each coarse model is carried to the fine mesh and "
+        "compared with the fine frame of the same time. Files in `{}/` (as `coarsegrain "
+        "simulate` writes them, without the ParaView series).\n\n",
+        d["integrator"].get<std::string>(), d["dt"].get<double>(), d["steps"].get<int>(), folder);
+    md +=
+        "| model | DOFs | per step s | speedup per step | trajectory l2 error | period error | "
+        "lag |\n|---|---:|---:|---:|---:|---:|---:|\n";
+    const nlohmann::json& fine = d["fine"];
+    md += fmt::format("| fine | {} | {:.2e} | 1 | 0 | period {} | 0 |\n", fine["dofs"].get<int>(),
+                      fine["timings"]["per_step"].get<double>(), figure(fine["period"], "{:.4f}"));
+    for (const nlohmann::json& m : d["methods"]) {
+        if (m.contains("error")) {
+            md += fmt::format("| {} | failed: {} | | | | | |\n", m["method"].get<std::string>(),
+                              m["error"].get<std::string>());
+            continue;
+        }
+        const nlohmann::json& probe0 =
+            m["errors"]["phase"].empty() ? nlohmann::json::object() : m["errors"]["phase"][0];
+        md += fmt::format(
+            "| {} | {} | {:.2e} | {:.0f}x | {:.3g} | {} | {} |\n", m["method"].get<std::string>(),
+            m["coarse"]["dofs"].get<int>(), m["coarse"]["timings"]["per_step"].get<double>(),
+            m["speedup"]["per_step"].get<double>(), m["errors"]["trajectory_l2_rel"].get<double>(),
+            figure(probe0.value("period_rel", nlohmann::json()), "{:+.3g}"),
+            figure(probe0.value("lag", nlohmann::json()), "{:+.3g}"));
+    }
+    md +=
+        "\nHow to read it:\n\n"
+        "- *per step s*: wall time of one time step (one back-substitution with the step "
+        "operator factorized once per run); *speedup per step*: the fine step's over the "
+        "coarse one, measured in this run.\n"
+        "- *trajectory l2 error*: sqrt(sum over saved times of |u_c - u|^2) / sqrt(sum of "
+        "|u|^2), over every fine node.\n"
+        "- *period error* and *lag*, on the first probe's dominant component, each "
+        "signal minus its mean over the run: the period is the mean spacing of its upward zero "
+        "crossings, the period error the coarse period over the fine one minus 1, the lag the "
+        "coarse model's last upward crossing minus the fine one's of the same index (positive: "
+        "the coarse model is late). \"-\" where a signal crosses its mean upward fewer than "
+        "twice. A lag pairs the n-th crossings of both models, so it says how far apart they "
+        "drifted only where the period error is small; with a period error of tens of percent "
+        "it pairs unrelated crossings.\n\n";
+    nlohmann::json made = nlohmann::json::array();
+    for (const auto& p : d["plots"]) made.push_back(p);
+    md += picture(made, folder + "/trajectory.png", "Probe displacements over time",
+                  "Each probe's largest component against time: the fine model (black) and "
+                  "every method.");
+    md += picture(made, folder + "/animation.gif", "Animation",
+                  "The fine model and every method side by side on one colour scale of |u|, "
+                  "at up to 60 of the saved frames.");
+    return md;
+}
+
 std::string report_markdown(const scene::Scene& sc, const std::string& command, const FineRun& f,
-                            const std::vector<MethodResult>& results, const nlohmann::json& made) {
+                            const std::vector<MethodResult>& results, const nlohmann::json& made,
+                            const nlohmann::json* dynamics) {
     const scene::FineModel& fine = f.model;
     std::string md = fmt::format("# coarsegrain {}: {}\n\n", command, sc.source);
     md += fmt::format(
@@ -167,6 +231,7 @@ std::string report_markdown(const scene::Scene& sc, const std::string& command, 
                       "||u^k - u||_A / ||g||_2 of the single-level solve on every level k "
                       "(Chen et al. 2019, Fig. 9; level 1 is the coarsest). Per-level figures "
                       "are in each mra folder's summary.json and mra_levels.csv.");
+    if (dynamics) md += dynamics_markdown(*dynamics);
     md +=
         "## Files\n\n"
         "- `summary.json`: the table's figures (`methods`) and the fine model's.\n"
@@ -178,6 +243,11 @@ std::string report_markdown(const scene::Scene& sc, const std::string& command, 
                 "- `{}/`: `summary.json`, `solution_coarse.vtu` (its solution on the "
                 "fine mesh, with `error`) and the method's own files.\n",
                 r.method);
+    if (dynamics)
+        md += fmt::format(
+            "- `{}/`: the dynamic run: `summary.json` (as `coarsegrain simulate`'s), "
+            "`trajectory.csv`, `trajectory.png`, `animation_data.bin` and `animation.gif`.\n",
+            (*dynamics)["folder"].get<std::string>());
     md += "\nThe scene, every key and each method's options: docs/guide.md.\n";
     return md;
 }
@@ -185,7 +255,8 @@ std::string report_markdown(const scene::Scene& sc, const std::string& command, 
 }  // namespace
 
 nlohmann::json write_report(const scene::Scene& sc, const std::string& command, const FineRun& f,
-                            const std::vector<MethodResult>& results, const fs::path& dir) {
+                            const std::vector<MethodResult>& results, const fs::path& dir,
+                            const nlohmann::json* dynamics) {
     const Phase phase("report");
     write_report_data(sc, f, results, dir / "report_data.json");
     nlohmann::json made = nlohmann::json::array();
@@ -199,7 +270,7 @@ nlohmann::json write_report(const scene::Scene& sc, const std::string& command, 
         if (fs::exists(dir / r.method / "mra_levels.csv"))
             csvs.push_back(r.method + "/mra_levels.csv");
     if (csvs.size() > 1) plot({"plot_mra.py", csvs, {"mra_levels.png"}});
-    const std::string md = report_markdown(sc, command, f, results, made);
+    const std::string md = report_markdown(sc, command, f, results, made, dynamics);
     io::write_atomically((dir / "report.md").string(), [&](std::ostream& os) { os << md; });
     return made;
 }

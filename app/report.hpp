@@ -3,6 +3,7 @@
 /// `coarsegrain coarsen --method a,b,...`): its table and its report (report.md with pictures).
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,9 @@
 #include "coarsegrain/scene/scene.hpp"
 
 namespace coarsegrain::app {
+
+/// The folder of `coarsegrain demo`'s dynamic run inside its output folder.
+inline constexpr const char* kDemoDynamicsFolder = "dynamics";
 
 /// The fine side of a comparison, computed once for every method.
 struct FineRun {
@@ -34,6 +38,9 @@ struct MethodResult {
     coarsen::Errors errors;
     Vector u_fine;           ///< the coarse solution carried to the fine DOFs
     nlohmann::json summary;  ///< the method's summary.json
+    /// The coarse model, if the comparison keeps its models for a run that follows (the demo's
+    /// dynamics), without its files and fine comparison (written already).
+    std::optional<coarsen::CoarseModel> model;
 };
 
 /// Writes the comparison's report into `dir` (method i's files are in dir/<method i>/; failed
@@ -44,12 +51,14 @@ struct MethodResult {
 ///   camera and one colour scale of |u|) and methods.png (errors and speedup per method), made
 ///   by scripts/plot_report.py; mra_levels.png (error per level, Chen 2019 Fig. 9) by
 ///   scripts/plot_mra.py when a method wrote mra_levels.csv;
-/// - report.md: the table, the pictures made and how to read them, the files.
+/// - report.md: the table, the pictures made and how to read them, the files; with `dynamics`
+///   (the demo's dynamic run, simulate_overview) also its table and pictures.
 /// Pictures need Python 3 with matplotlib; without, report.md says how to make them (make_plot).
 /// Returns the pictures made (file names).
 nlohmann::json write_report(const scene::Scene& scene, const std::string& command,
                             const FineRun& fine, const std::vector<MethodResult>& results,
-                            const std::filesystem::path& dir);
+                            const std::filesystem::path& dir,
+                            const nlohmann::json* dynamics = nullptr);
 
 /// Prints the comparison table on stdout: a row per method with coarse DOFs, build and solve
 /// seconds, speedup over the fine solve and the errors.

@@ -13,6 +13,7 @@
 #include "output.hpp"
 #include "plots.hpp"
 #include "report.hpp"
+#include "run_dynamics.hpp"
 
 namespace coarsegrain::app {
 
@@ -121,13 +122,14 @@ nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene
 /// Builds, solves and compares one method against the fine run; writes its files and its
 /// summary.json to `dir`. `fine_vtu` is the fine solution's file as seen from `dir`; if
 /// `write_fine_vtu`, it is written there once the coarse model is built (so that a method that
-/// fails on its input leaves no file).
+/// fails on its input leaves no file). With `keep_model` the result holds the coarse model.
 MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& method,
-                        const fs::path& dir, const std::string& fine_vtu, bool write_fine_vtu) {
+                        const fs::path& dir, const std::string& fine_vtu, bool write_fine_vtu,
+                        bool keep_model = false) {
     const scene::FineModel& fine = f.model;
     const Vector& u = f.solution.u;
     const int dim = fine.mesh.dim();
-    const coarsen::CoarseModel coarse =
+    coarsen::CoarseModel coarse =
         coarsen::build_coarse_model(sc, fine, method, f.solution.factorization.get());
     if (write_fine_vtu) write_fine(f, dir);
     Timings tc = coarse.timings;
@@ -184,6 +186,11 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         {"peak_memory_mb", peak_rss_mb()},
     };
     write_summary(dir.string(), r.summary);
+    if (keep_model) {
+        coarse.outputs.clear();
+        coarse.compare_with_fine = nullptr;
+        r.model = std::move(coarse);
+    }
     return r;
 }
 
@@ -221,11 +228,11 @@ void run_one(const scene::Scene& sc, const std::string& method, const fs::path& 
 // One method of a comparison: its result, or its failure (the reason, and no folder) if it
 // cannot run on this scene or fails while it builds or solves.
 MethodResult try_method(const scene::Scene& sc, FineRun& f, const std::string& method,
-                        const fs::path& dir) {
+                        const fs::path& dir, bool keep_model) {
     const fs::path sub = dir / method;
     try {
         io::ensure_writable_dir(sub.string());
-        return run_method(sc, f, method, sub, "../solution_fine.vtu", false);
+        return run_method(sc, f, method, sub, "../solution_fine.vtu", false, keep_model);
     } catch (const Error& e) {
         std::error_code ec;
         fs::remove_all(sub, ec);
@@ -237,14 +244,32 @@ MethodResult try_method(const scene::Scene& sc, FineRun& f, const std::string& m
     }
 }
 
-int run_comparison(const scene::Scene& sc, const std::vector<std::string>& methods,
-                   const fs::path& dir, const std::string& command, double read_seconds) {
-    FineRun f = solve_fine(sc, methods, read_seconds);
+/// A comparison's fine run and every method's result.
+struct Comparison {
+    FineRun fine;
     std::vector<MethodResult> results;
-    for (const std::string& method : methods) results.push_back(try_method(sc, f, method, dir));
-    f.solution.factorization.reset();  // used by the methods only
-    write_fine(f, dir);
-    const nlohmann::json plots = write_report(sc, command, f, results, dir);
+};
+
+/// The fine solve, then every method against it (their folders in `dir`), and the fine
+/// solution's file. With `keep_models` each result holds its coarse model.
+Comparison compare_methods(const scene::Scene& sc, const std::vector<std::string>& methods,
+                           const fs::path& dir, double read_seconds, bool keep_models) {
+    Comparison c{solve_fine(sc, methods, read_seconds), {}};
+    for (const std::string& method : methods)
+        c.results.push_back(try_method(sc, c.fine, method, dir, keep_models));
+    c.fine.solution.factorization.reset();  // used by the methods only
+    write_fine(c.fine, dir);
+    return c;
+}
+
+/// The comparison's report, summary.json and table; the demo's dynamic run (its summary, if
+/// given) goes into the report and under the summary's "dynamics". Returns the methods that
+/// failed.
+int finish_comparison(const scene::Scene& sc, const std::string& command, const Comparison& c,
+                      const fs::path& dir, const nlohmann::json* dynamics) {
+    const FineRun& f = c.fine;
+    const std::vector<MethodResult>& results = c.results;
+    const nlohmann::json plots = write_report(sc, command, f, results, dir, dynamics);
     nlohmann::json fine_json = fine_sizes(f.model);
     fine_json["timings"] = timings_json(f.timings);
     nlohmann::json rows = nlohmann::json::array();
@@ -266,25 +291,33 @@ int run_comparison(const scene::Scene& sc, const std::vector<std::string>& metho
              {"speedup", {{"factorize_and_solve", r.speedup}}},
              {"max_displacement", r.summary["max_displacement"]}});
     }
-    write_summary(dir.string(), {
-                                    {"command", command},
-                                    {"scene", sc.source},
-                                    {"fine", fine_json},
-                                    {"solver", solve::backend_name(sc.solver.backend)},
-                                    {"threads", omp_get_max_threads()},
-                                    {"probes", probes_json(sc, f.probes)},
-                                    {"warnings", f.model.warnings},
-                                    {"max_displacement",
-                                     nodal_magnitude(f.solution.u, f.model.mesh.dim()).maxCoeff()},
-                                    {"strain_energy", f.solution.strain_energy},
-                                    {"compliance", f.model.f.dot(f.solution.u)},
-                                    {"methods", rows},
-                                    {"failed_methods", failed},
-                                    {"report", "report.md"},
-                                    {"plots", plots},
-                                    {"peak_memory_mb", peak_rss_mb()},
-                                });
+    nlohmann::json summary = {
+        {"command", command},
+        {"scene", sc.source},
+        {"fine", fine_json},
+        {"solver", solve::backend_name(sc.solver.backend)},
+        {"threads", omp_get_max_threads()},
+        {"probes", probes_json(sc, f.probes)},
+        {"warnings", f.model.warnings},
+        {"max_displacement", nodal_magnitude(f.solution.u, f.model.mesh.dim()).maxCoeff()},
+        {"strain_energy", f.solution.strain_energy},
+        {"compliance", f.model.f.dot(f.solution.u)},
+        {"methods", rows},
+        {"failed_methods", failed},
+        {"report", "report.md"},
+        {"plots", plots},
+        {"peak_memory_mb", peak_rss_mb()},
+    };
+    if (dynamics) summary["dynamics"] = *dynamics;
+    write_summary(dir.string(), summary);
     print_comparison_table(sc, command, f, results);
+    return failed;
+}
+
+int run_comparison(const scene::Scene& sc, const std::vector<std::string>& methods,
+                   const fs::path& dir, const std::string& command, double read_seconds) {
+    const Comparison c = compare_methods(sc, methods, dir, read_seconds, false);
+    const int failed = finish_comparison(sc, command, c, dir, nullptr);
     std::printf(
         "  wrote %s/report.md, summary.json, solution_fine.vtu and a folder per method "
         "(peak memory %.0f MB)\n",
@@ -305,6 +338,32 @@ int run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
     check_methods(sc, methods);
     const OutputFolder folder(out_dir);
     return run_comparison(sc, methods, out_dir, command, read_seconds);
+}
+
+int run_demo(const scene::Scene& sc, const std::string& out_dir, double read_seconds) {
+    CG_VERIFY_AS(InvalidScene, sc.dynamics.has_value(), "{}: the demo needs a \"dynamics\" block",
+                 sc.source);
+    const std::vector<std::string> methods = coarsen::configured_methods(sc);
+    check_methods(sc, methods);
+    const OutputFolder folder(out_dir);
+    const fs::path dir(out_dir);
+    Comparison c = compare_methods(sc, methods, dir, read_seconds, true);
+    std::vector<BuiltModel> built;
+    for (MethodResult& r : c.results) {
+        if (r.model) built.push_back({r.method, std::move(*r.model)});
+        r.model.reset();
+    }
+    int failed = 0;
+    const nlohmann::json dynamics = simulate_built(sc, c.fine.model, std::move(built),
+                                                   (dir / kDemoDynamicsFolder).string(), failed);
+    const nlohmann::json overview = simulate_overview(dynamics, kDemoDynamicsFolder);
+    failed += finish_comparison(sc, "demo", c, dir, &overview);
+    print_simulate_table(sc, dynamics, "coarsegrain demo, released from rest");
+    std::printf(
+        "  wrote %s/report.md, summary.json, solution_fine.vtu, a folder per method and %s/ "
+        "(peak memory %.0f MB)\n",
+        dir.c_str(), kDemoDynamicsFolder, peak_rss_mb());
+    return failed;
 }
 
 }  // namespace coarsegrain::app

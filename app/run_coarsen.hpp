@@ -23,6 +23,16 @@ namespace coarsegrain::app {
 /// @return the number of methods that failed (0 with one method: its failure throws)
 /// @throws Error before any work if the only method, or every method, cannot run on the scene
 int run_coarsen(const scene::Scene& scene, const std::vector<std::string>& methods,
-                 const std::string& out_dir, const std::string& command, double read_seconds);
+                const std::string& out_dir, const std::string& command, double read_seconds);
+
+/// `coarsegrain demo`: the comparison of every method the scene configures (run_coarsen with
+/// command "demo"), then a dynamic run of the same fine model and of the coarse models the
+/// comparison built (simulate_built: the scene's "dynamics"; nothing is built twice) into
+/// DIR/dynamics/. report.md gains the dynamic run's table and pictures, and summary.json its
+/// overview under "dynamics" (simulate_overview). Prints both tables.
+/// @return the number of methods that failed, in the comparison or in the dynamic run
+/// @throws Error before any work if no method can run on the scene; InvalidScene if it has no
+///         "dynamics" block
+int run_demo(const scene::Scene& scene, const std::string& out_dir, double read_seconds);
 
 }  // namespace coarsegrain::app

@@ -4,15 +4,20 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 
+#include "animation.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/assembly.hpp"
+#include "coarsegrain/io/file_util.hpp"
 #include "coarsegrain/io/table.hpp"
 #include "coarsegrain/sim/dynamics.hpp"
 #include "coarsegrain/sim/modes.hpp"
+#include "coarsegrain/sim/phase.hpp"
 #include "output.hpp"
 #include "plots.hpp"
 
@@ -22,21 +27,26 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// The fine model with its mass.
+/// The fine model (held by reference: it outlives the run) with its mass.
 struct FineDynamics {
-    scene::FineModel model;
+    const scene::FineModel& model;
     SparseMatrix M;
-    Timings timings;
+    Timings timings;  ///< the model's phases so far, "mass", then the run's
 };
 
-FineDynamics build_fine(const scene::Scene& sc, fem::MassType mass, double read_seconds) {
-    FineDynamics f;
-    f.timings.add("read", read_seconds);
-    f.model = scene::build_fine_model(sc, &f.timings);
-    print_warnings(f.model.warnings);
+FineDynamics with_fine_mass(const scene::FineModel& model, fem::MassType mass, Timings timings) {
+    FineDynamics f{model, {}, std::move(timings)};
     const Phase phase("mass", &f.timings);
-    f.M = fem::mass_matrix(f.model.mesh, f.model.materials, mass);
+    f.M = fem::mass_matrix(model.mesh, model.materials, mass);
     return f;
+}
+
+/// The scene's fine model, its phases ("read" = read_seconds, then the assembly's) in `timings`.
+scene::FineModel build_fine(const scene::Scene& sc, double read_seconds, Timings& timings) {
+    timings.add("read", read_seconds);
+    scene::FineModel model = scene::build_fine_model(sc, &timings);
+    print_warnings(model.warnings);
+    return model;
 }
 
 double sum(const Timings& t) {
@@ -52,16 +62,22 @@ struct CoarseDynamics {
     Timings timings;  ///< "build" (the method's phases summed), "mass", then the run's
 };
 
-CoarseDynamics build_coarse(const scene::Scene& sc, const FineDynamics& fine,
-                            const std::string& method) {
+/// A built coarse model with its mass for the fine model's.
+CoarseDynamics with_mass(coarsen::CoarseModel model, const FineDynamics& fine,
+                         const std::string& source, const std::string& method) {
     CoarseDynamics c;
-    c.model = coarsen::build_coarse_model(sc, fine.model, method);
-    CG_VERIFY(static_cast<bool>(c.model.mass), "{}: method {} defines no coarse mass", sc.source,
+    c.model = std::move(model);
+    CG_VERIFY(static_cast<bool>(c.model.mass), "{}: method {} defines no coarse mass", source,
               method);
     c.timings.add("build", sum(c.model.timings));
     const Phase phase("mass", &c.timings);
     c.M = c.model.mass(fine.M);
     return c;
+}
+
+CoarseDynamics build_coarse(const scene::Scene& sc, const FineDynamics& fine,
+                            const std::string& method) {
+    return with_mass(coarsen::build_coarse_model(sc, fine.model, method), fine, sc.source, method);
 }
 
 /// A coarse model's sizes and timings for summary "coarse".
@@ -100,6 +116,16 @@ bool fits_in_memory(double bytes) {
     return pages <= 0 || page <= 0 || bytes <= 0.5 * static_cast<double>(pages) * page;
 }
 
+/// Checks before the run that its saved frames of the fine model fit in memory.
+void check_frames_fit(const scene::Scene& sc, const scene::FineModel& fm) {
+    const sim::DynamicsOptions& o = *sc.dynamics;
+    const double frames = 1.0 + o.steps / o.output_every;
+    CG_VERIFY(fits_in_memory(frames * static_cast<double>(fm.K.rows()) * 8),
+              "{}: dynamics.output_every: {:.0f} saved frames of {} DOFs need {:.1f} GB, more "
+              "than half this machine's memory; save fewer frames",
+              sc.source, frames, fm.K.rows(), frames * static_cast<double>(fm.K.rows()) * 8e-9);
+}
+
 std::string frame_file(const std::string& series, std::size_t i) {
     return fmt::format("{}/frame_{:05d}.vtu", series, i);
 }
@@ -119,11 +145,12 @@ std::pair<double, std::string> write_frame(const fs::path& dir, const std::strin
     return {time, file};
 }
 
-/// One model's run carried to the fine mesh: probe trajectories and its errors against the fine
-/// trajectory.
+/// One model's run carried to the fine mesh: probe trajectories, its errors against the fine
+/// trajectory, and its frames for the animation.
 struct RunResult {
     std::vector<std::vector<Eigen::VectorXd>> probes;  ///< [time][probe]
     double trajectory_l2_rel = 0, probe_max_rel = 0;
+    std::vector<float> animation;  ///< append_animation_frame of each frame shown
 };
 
 nlohmann::json probe_series(const std::vector<std::vector<Eigen::VectorXd>>& probes,
@@ -133,11 +160,46 @@ nlohmann::json probe_series(const std::vector<std::vector<Eigen::VectorXd>>& pro
     return series;
 }
 
+/// The fine run every coarse run is compared with, and what the run writes.
+struct FineReference {
+    const sim::Trajectory* run = nullptr;
+    RunResult result;
+    AnimationView view;
+    std::vector<std::size_t> shown;  ///< the saved frames the animation shows
+    bool series = true;              ///< whether the ParaView series are written
+};
+
+/// A model's saved frames on the fine mesh, u = frame(i) for each saved time i: its probes and
+/// animation frames go to `r`, then compare(u, i) runs (if given), and the frame is written to
+/// the series `name` (DIR/<name>/, DIR/<name>.pvd) if the run writes series, with its error
+/// against the fine frame if `with_error`.
+template <class Frame>
+void carry_frames(const scene::Scene& sc, const mesh::Mesh& mesh, const FineReference& ref,
+                  const std::vector<double>& times, Frame frame, const std::string& name,
+                  const fs::path& dir, bool with_error, RunResult& r,
+                  const std::function<void(const Vector& u, std::size_t i)>& compare) {
+    const scene::ProbeSampler probes(sc, mesh);
+    std::vector<std::pair<double, std::string>> written;
+    if (ref.series) fs::create_directories(dir / name);
+    std::size_t next_shown = 0;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+        const Vector u = frame(i);
+        r.probes.push_back(probes(u));
+        if (compare) compare(u, i);
+        if (next_shown < ref.shown.size() && ref.shown[next_shown] == i) {
+            append_animation_frame(ref.view, u, r.animation);
+            ++next_shown;
+        }
+        if (ref.series)
+            written.push_back(write_frame(dir, name, i, times[i], mesh, u,
+                                          with_error ? &ref.run->u[i] : nullptr));
+    }
+    if (ref.series) io::write_pvd((dir / (name + ".pvd")).string(), written);
+}
+
 /// Steps the coarse model from the state matching the fine start, carries every saved frame to
-/// the fine mesh, writes it and compares it with the fine frame of the same time.
-RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine,
-                     const sim::Trajectory& fine_run,
-                     const std::vector<std::vector<Eigen::VectorXd>>& fine_probes,
+/// the fine mesh and compares it with the fine frame of the same time.
+RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine, const FineReference& ref,
                      CoarseDynamics& c, const std::string& method, const fs::path& dir) {
     const sim::DynamicsOptions& o = *sc.dynamics;
     const coarsen::CoarseModel& m = c.model;
@@ -160,26 +222,22 @@ RunResult run_coarse(const scene::Scene& sc, const FineDynamics& fine,
     c.timings.add("factorize", run.factorize_seconds);
     c.timings.add("per_step", run.per_step_seconds);
     RunResult r;
-    const scene::ProbeSampler probes(sc, fine.model.mesh);
-    std::vector<std::pair<double, std::string>> frames;
     double diff2 = 0, norm2 = 0, probe_diff = 0, probe_max = 0;
+    const std::vector<std::vector<Eigen::VectorXd>>& fine_probes = ref.result.probes;
+    const auto compare = [&](const Vector& u, std::size_t i) {
+        const Vector& u_fine = ref.run->u[i];
+        diff2 += (u - u_fine).squaredNorm();
+        norm2 += u_fine.squaredNorm();
+        for (std::size_t p = 0; p < sc.probes.size(); ++p) {
+            probe_diff = std::max(probe_diff, (r.probes.back()[p] - fine_probes[i][p]).norm());
+            probe_max = std::max(probe_max, fine_probes[i][p].norm());
+        }
+    };
     {
         const Phase phase("write frames", &c.timings);
-        fs::create_directories(dir / method);
-        for (std::size_t i = 0; i < run.times.size(); ++i) {
-            const Vector u = m.to_fine * run.u[i];
-            const Vector& u_fine = fine_run.u[i];
-            diff2 += (u - u_fine).squaredNorm();
-            norm2 += u_fine.squaredNorm();
-            r.probes.push_back(probes(u));
-            for (std::size_t p = 0; p < sc.probes.size(); ++p) {
-                probe_diff = std::max(probe_diff, (r.probes.back()[p] - fine_probes[i][p]).norm());
-                probe_max = std::max(probe_max, fine_probes[i][p].norm());
-            }
-            frames.push_back(
-                write_frame(dir, method, i, run.times[i], fine.model.mesh, u, &u_fine));
-        }
-        io::write_pvd((dir / (method + ".pvd")).string(), frames);
+        carry_frames(
+            sc, fine.model.mesh, ref, run.times,
+            [&](std::size_t i) { return m.to_fine * run.u[i]; }, method, dir, true, r, compare);
     }
     r.trajectory_l2_rel = norm2 > 0 ? std::sqrt(diff2 / norm2) : std::sqrt(diff2);
     r.probe_max_rel = probe_max > 0 ? probe_diff / probe_max : probe_diff;
@@ -211,6 +269,47 @@ io::Table trajectory_table(const std::vector<double>& times,
     return t;
 }
 
+/// A number, or null for none.
+nlohmann::json optional_json(const std::optional<double>& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json();
+}
+
+/// errors.phase: per probe, the coarse phase against the fine one (sim::compare_phase) on the
+/// probe's dominant component, the one of largest fine range (max - min) over the run.
+nlohmann::json phase_json(const std::vector<double>& times, const RunResult& fine,
+                          const RunResult& coarse, std::size_t probes, int dim) {
+    nlohmann::json out = nlohmann::json::array();
+    for (std::size_t p = 0; p < probes; ++p) {
+        int dominant = 0;
+        double widest = -1;
+        for (int d = 0; d < dim; ++d) {
+            double lo = 0, hi = 0;
+            for (const auto& at : fine.probes) {
+                lo = std::min(lo, at[p][d]);
+                hi = std::max(hi, at[p][d]);
+            }
+            if (hi - lo > widest) {
+                widest = hi - lo;
+                dominant = d;
+            }
+        }
+        std::vector<double> f, c;
+        for (std::size_t i = 0; i < times.size(); ++i) {
+            f.push_back(fine.probes[i][p][dominant]);
+            c.push_back(coarse.probes[i][p][dominant]);
+        }
+        const sim::PhaseComparison ph = sim::compare_phase(times, f, c);
+        out.push_back({{"component", axis_name(dominant)},
+                       {"crossings_fine", ph.crossings_fine},
+                       {"crossings", ph.crossings},
+                       {"period_fine", optional_json(ph.period_fine)},
+                       {"period", optional_json(ph.period)},
+                       {"period_rel", optional_json(ph.period_rel)},
+                       {"lag", optional_json(ph.lag)}});
+    }
+    return out;
+}
+
 /// The summary with its method entries: one method's keys at the top level, several in
 /// "methods" (with "failed_methods"); and the peak memory.
 nlohmann::json with_methods(nlohmann::json summary, const std::vector<nlohmann::json>& entries,
@@ -231,87 +330,110 @@ nlohmann::json fine_json(const FineDynamics& f) {
     return j;
 }
 
-}  // namespace
-
-int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods,
-                 const std::string& out_dir, double read_seconds) {
-    CG_VERIFY_AS(InvalidScene, sc.dynamics.has_value(),
-                 "{}: simulate needs a \"dynamics\" block (at least \"dt\" and \"steps\"; "
-                 "docs/guide.md, \"Dynamics\")",
-                 sc.source);
+/// Steps the fine model from the scene's start and carries its frames (probes, animation, the
+/// series "fine" if written).
+sim::Trajectory run_fine(const scene::Scene& sc, FineDynamics& fine, FineReference& ref,
+                         const fs::path& dir) {
     const sim::DynamicsOptions& o = *sc.dynamics;
-    check_methods(sc, methods);
-    const OutputFolder folder(out_dir);
-    const fs::path dir(out_dir);
-    FineDynamics fine = build_fine(sc, o.mass, read_seconds);
     const scene::FineModel& fm = fine.model;
-    const double frames = 1.0 + o.steps / o.output_every;
-    CG_VERIFY(fits_in_memory(frames * static_cast<double>(fm.K.rows()) * 8),
-              "{}: dynamics.output_every: {:.0f} saved frames of {} DOFs need {:.1f} GB, more "
-              "than half this machine's memory; save fewer frames",
-              sc.source, frames, fm.K.rows(), frames * static_cast<double>(fm.K.rows()) * 8e-9);
-
     std::pair<sim::State, Vector> start;
     {
         const Phase phase("initial state", &fine.timings);
         start = sim::initial_state(
             fm.K, fm.f, fm.bc, sim::uniform_field(fm.K.rows(), o.initial_velocity), o, sc.solver);
     }
-    const sim::Trajectory run =
+    sim::Trajectory run =
         sim::simulate(fm.K, fine.M, fm.bc, start.first, start.second, o, sc.solver, "fine");
     fine.timings.add("factorize", run.factorize_seconds);
     fine.timings.add("per_step", run.per_step_seconds);
-    RunResult fine_result;
-    {
-        const Phase phase("write frames", &fine.timings);
-        fs::create_directories(dir / "fine");
-        std::vector<std::pair<double, std::string>> frames_written;
-        const scene::ProbeSampler probes(sc, fm.mesh);
-        for (std::size_t i = 0; i < run.times.size(); ++i) {
-            fine_result.probes.push_back(probes(run.u[i]));
-            frames_written.push_back(
-                write_frame(dir, "fine", i, run.times[i], fm.mesh, run.u[i], nullptr));
-        }
-        io::write_pvd((dir / "fine.pvd").string(), frames_written);
-    }
+    const Phase phase("write frames", &fine.timings);
+    ref.view = animation_view(fm.mesh, fm.boundary, run.u);
+    ref.shown = animation_frames(run.times.size());
+    carry_frames(sc, fm.mesh, ref, run.times, [&](std::size_t i) { return run.u[i]; }, "fine", dir,
+                 false, ref.result, {});
+    return run;
+}
+
+/// Writes animation_data.bin and makes animation.gif from it (phase "animation" of the fine
+/// timings); returns whether the GIF was made.
+bool write_animation(const scene::Scene& sc, FineDynamics& fine, const FineReference& ref,
+                     const std::vector<std::pair<std::string, const RunResult*>>& runs,
+                     const fs::path& dir) {
+    const Phase phase("animation", &fine.timings);
+    std::vector<double> times;
+    for (const std::size_t i : ref.shown) times.push_back(ref.run->times[i]);
+    std::vector<AnimationModel> models;
+    for (const auto& [name, run] : runs) models.push_back({name, &run->animation});
+    write_animation_data((dir / "animation_data.bin").string(), sc.source, fine.model.mesh,
+                         ref.view, times, models);
+    return make_plot(
+        dir.string(),
+        {"plot_animation.py", {"animation.gif", "animation_data.bin"}, {"animation.gif"}});
+}
+
+using CoarseSource = std::function<CoarseDynamics(const std::string& method)>;
+
+/// What simulate_models made: the summary (not yet written) and the methods that failed.
+struct SimulateRun {
+    nlohmann::json summary;
+    int failed = 0;
+};
+
+/// The run shared by `simulate` and the demo: steps the fine model and the coarse model that
+/// `source` gives for each method, compares them and writes every file but summary.json to
+/// `dir` (the ParaView series only if `series`).
+SimulateRun simulate_models(const scene::Scene& sc, FineDynamics& fine,
+                            const std::vector<std::string>& methods, const CoarseSource& source,
+                            const fs::path& dir, bool series) {
+    const sim::DynamicsOptions& o = *sc.dynamics;
+    const scene::FineModel& fm = fine.model;
+    const int dim = fm.mesh.dim();
+    FineReference ref;
+    ref.series = series;
+    const sim::Trajectory run = run_fine(sc, fine, ref, dir);
+    ref.run = &run;
 
     std::vector<RunResult> results(methods.size());
     std::vector<nlohmann::json> entries;
-    int failed = 0;
+    SimulateRun out;
     for (std::size_t k = 0; k < methods.size(); ++k) {
         const std::string& method = methods[k];
-        entries.push_back(method_entry(method, methods.size(), dir, failed, [&](nlohmann::json& e) {
-            CoarseDynamics c = build_coarse(sc, fine, method);
-            results[k] = run_coarse(sc, fine, run, fine_result.probes, c, method, dir);
-            nlohmann::json probes = nlohmann::json::array();
-            for (std::size_t p = 0; p < sc.probes.size(); ++p)
-                probes.push_back({{"point", to_std(sc.probes[p])},
-                                  {"u_fine", probe_series(fine_result.probes, p)},
-                                  {"u", probe_series(results[k].probes, p)}});
-            e["coarse"] = coarse_json(c);
-            e["probes"] = probes;
-            e["timings"] = {{"fine", timings_json(fine.timings)},
-                            {"coarse", timings_json(c.timings)}};
-            e["speedup"] = {{"per_step", run.per_step_seconds / c.timings["per_step"]}};
-            e["errors"] = {{"trajectory_l2_rel", results[k].trajectory_l2_rel},
-                           {"probe_max_rel", results[k].probe_max_rel}};
-            e["pvd"] = method + ".pvd";
-        }));
+        entries.push_back(
+            method_entry(method, methods.size(), dir, out.failed, [&](nlohmann::json& e) {
+                CoarseDynamics c = source(method);
+                results[k] = run_coarse(sc, fine, ref, c, method, dir);
+                nlohmann::json probes = nlohmann::json::array();
+                for (std::size_t p = 0; p < sc.probes.size(); ++p)
+                    probes.push_back({{"point", to_std(sc.probes[p])},
+                                      {"u_fine", probe_series(ref.result.probes, p)},
+                                      {"u", probe_series(results[k].probes, p)}});
+                e["coarse"] = coarse_json(c);
+                e["probes"] = probes;
+                e["timings"] = {{"coarse", timings_json(c.timings)}};
+                e["speedup"] = {{"per_step", run.per_step_seconds / c.timings["per_step"]}};
+                e["errors"] = {{"trajectory_l2_rel", results[k].trajectory_l2_rel},
+                               {"probe_max_rel", results[k].probe_max_rel},
+                               {"phase", phase_json(run.times, ref.result, results[k],
+                                                    sc.probes.size(), dim)}};
+                if (series) e["pvd"] = method + ".pvd";
+            }));
     }
 
-    std::vector<std::pair<std::string, const RunResult*>> runs = {{"fine", &fine_result}};
+    std::vector<std::pair<std::string, const RunResult*>> runs = {{"fine", &ref.result}};
     for (std::size_t k = 0; k < methods.size(); ++k)
         if (!entries[k].contains("error")) runs.emplace_back(methods[k], &results[k]);
-    const int dim = fm.mesh.dim();
     io::write_csv(trajectory_table(run.times, runs, sc.probes.size(), dim),
                   (dir / "trajectory.csv").string());
     nlohmann::json plots = nlohmann::json::array();
-    if (!sc.probes.empty()) {
-        const PlotOutput plot{
-            "plot_trajectory.py", {"trajectory.png", "trajectory.csv"}, {"trajectory.png"}};
-        if (make_plot(out_dir, plot)) plots.push_back("trajectory.png");
-    }
+    if (!sc.probes.empty() &&
+        make_plot(dir.string(),
+                  {"plot_trajectory.py", {"trajectory.png", "trajectory.csv"}, {"trajectory.png"}}))
+        plots.push_back("trajectory.png");
+    if (write_animation(sc, fine, ref, runs, dir)) plots.push_back("animation.gif");
 
+    // The fine timings are complete only now (animation): every entry reports them.
+    for (nlohmann::json& e : entries)
+        if (!e.contains("error")) e["timings"]["fine"] = timings_json(fine.timings);
     nlohmann::json summary = {
         {"command", "simulate"},
         {"scene", sc.source},
@@ -327,37 +449,140 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
         {"solver", solve::backend_name(sc.solver.backend)},
         {"threads", omp_get_max_threads()},
         {"warnings", fm.warnings},
-        {"pvd", "fine.pvd"},
         {"plots", plots},
+        {"animation_frames", ref.shown.size()},
     };
+    if (series) summary["pvd"] = "fine.pvd";
     nlohmann::json probes = nlohmann::json::array();
     for (std::size_t p = 0; p < sc.probes.size(); ++p)
         probes.push_back(
-            {{"point", to_std(sc.probes[p])}, {"u_fine", probe_series(fine_result.probes, p)}});
+            {{"point", to_std(sc.probes[p])}, {"u_fine", probe_series(ref.result.probes, p)}});
     summary["probes"] = probes;
     summary["timings"] = {{"fine", timings_json(fine.timings)}};
-    write_summary(out_dir, with_methods(std::move(summary), entries, failed));
+    out.summary = with_methods(std::move(summary), entries, out.failed);
+    return out;
+}
 
-    std::printf("coarsegrain simulate: %s, %s, dt %g, %d steps\n", sc.source.c_str(),
+/// The lag of the first probe's phase, or "-" if there is none.
+std::string lag_text(const nlohmann::json& entry) {
+    const nlohmann::json& phase = entry["errors"]["phase"];
+    if (phase.empty() || phase[0]["lag"].is_null()) return "-";
+    return fmt::format("{:+.3g}", phase[0]["lag"].get<double>());
+}
+
+/// The entries of a summary's methods: "methods", or the one method at the top level.
+std::vector<nlohmann::json> method_entries(const nlohmann::json& summary) {
+    if (summary.contains("methods")) return {summary["methods"].begin(), summary["methods"].end()};
+    if (summary.contains("method")) return {summary};
+    return {};
+}
+
+}  // namespace
+
+nlohmann::json simulate_overview(const nlohmann::json& summary, const std::string& folder) {
+    nlohmann::json methods = nlohmann::json::array();
+    nlohmann::json period = nullptr;
+    for (const nlohmann::json& e : method_entries(summary)) {
+        if (e.contains("error")) {
+            methods.push_back({{"method", e["method"]}, {"error", e["error"]}});
+            continue;
+        }
+        nlohmann::json row = {{"method", e["method"]},
+                              {"coarse", e["coarse"]},
+                              {"speedup", e["speedup"]},
+                              {"errors", e["errors"]}};
+        row["coarse"]["timings"] = e["timings"]["coarse"];
+        methods.push_back(row);
+        if (period.is_null() && !e["errors"]["phase"].empty())
+            period = e["errors"]["phase"][0]["period_fine"];
+    }
+    nlohmann::json plots = nlohmann::json::array();
+    for (const auto& p : summary["plots"]) plots.push_back(folder + "/" + p.get<std::string>());
+    const nlohmann::json& d = summary["dynamics"];
+    return {{"folder", folder},
+            {"integrator", d["integrator"]},
+            {"dt", d["dt"]},
+            {"steps", d["steps"]},
+            {"start", d["start"]},
+            {"fine",
+             {{"dofs", summary["fine"]["dofs"]},
+              {"timings", {{"per_step", summary["fine"]["timings"]["per_step"]}}},
+              {"period", period}}},
+            {"methods", methods},
+            {"failed_methods", summary.value("failed_methods", 0)},
+            {"plots", plots}};
+}
+
+void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
+                          const std::string& command) {
+    const sim::DynamicsOptions& o = *sc.dynamics;
+    std::printf("%s: %s, %s, dt %g, %d steps\n", command.c_str(), sc.source.c_str(),
                 sim::integrator_name(o.integrator).c_str(), o.dt, o.steps);
-    std::printf("  %-20s %9s %12s %12s %10s %12s\n", "model", "DOFs", "factorize s", "per step s",
-                "speedup", "traj. l2");
-    std::printf("  %-20s %9d %12.4f %12.3e %10s %12s\n", "fine", fm.mesh.num_dofs(),
-                run.factorize_seconds, run.per_step_seconds, "", "");
-    for (const nlohmann::json& e : entries) {
+    std::printf("  %-20s %9s %12s %12s %10s %12s %10s\n", "model", "DOFs", "factorize s",
+                "per step s", "speedup", "traj. l2", "lag p0");
+    const nlohmann::json& ft = summary["fine"]["timings"];
+    std::printf("  %-20s %9d %12.4f %12.3e %10s %12s %10s\n", "fine",
+                summary["fine"]["dofs"].get<int>(), ft["factorize"].get<double>(),
+                ft["per_step"].get<double>(), "", "", "");
+    for (const nlohmann::json& e : method_entries(summary)) {
         if (e.contains("error")) {
             std::printf("  %-20s failed: %s\n", e["method"].get<std::string>().c_str(),
                         e["error"].get<std::string>().c_str());
             continue;
         }
-        std::printf(
-            "  %-20s %9d %12.4f %12.3e %9.1fx %12.4g\n", e["method"].get<std::string>().c_str(),
-            e["coarse"]["dofs"].get<int>(), e["timings"]["coarse"]["factorize"].get<double>(),
-            e["timings"]["coarse"]["per_step"].get<double>(),
-            e["speedup"]["per_step"].get<double>(), e["errors"]["trajectory_l2_rel"].get<double>());
+        std::printf("  %-20s %9d %12.4f %12.3e %9.1fx %12.4g %10s\n",
+                    e["method"].get<std::string>().c_str(), e["coarse"]["dofs"].get<int>(),
+                    e["timings"]["coarse"]["factorize"].get<double>(),
+                    e["timings"]["coarse"]["per_step"].get<double>(),
+                    e["speedup"]["per_step"].get<double>(),
+                    e["errors"]["trajectory_l2_rel"].get<double>(), lag_text(e).c_str());
     }
-    std::printf("  wrote %s/fine.pvd, trajectory.csv and summary.json\n", out_dir.c_str());
-    return failed;
+    std::printf(
+        "  (lag p0: the coarse model's last upward crossing of probe 0's mean minus the "
+        "fine model's, in time units; + is late)\n");
+}
+
+int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods,
+                 const std::string& out_dir, double read_seconds) {
+    CG_VERIFY_AS(InvalidScene, sc.dynamics.has_value(),
+                 "{}: simulate needs a \"dynamics\" block (at least \"dt\" and \"steps\"; "
+                 "docs/guide.md, \"Dynamics\")",
+                 sc.source);
+    check_methods(sc, methods);
+    const OutputFolder folder(out_dir);
+    Timings timings;
+    const scene::FineModel model = build_fine(sc, read_seconds, timings);
+    check_frames_fit(sc, model);
+    FineDynamics fine = with_fine_mass(model, sc.dynamics->mass, std::move(timings));
+    const SimulateRun run = simulate_models(
+        sc, fine, methods,
+        [&](const std::string& method) { return build_coarse(sc, fine, method); }, out_dir, true);
+    write_summary(out_dir, run.summary);
+    print_simulate_table(sc, run.summary);
+    std::printf("  wrote %s/fine.pvd, trajectory.csv, animation.gif and summary.json\n",
+                out_dir.c_str());
+    return run.failed;
+}
+
+nlohmann::json simulate_built(const scene::Scene& sc, const scene::FineModel& fine_model,
+                              std::vector<BuiltModel> coarse, const std::string& out_dir,
+                              int& failed) {
+    CG_VERIFY_AS(InvalidScene, sc.dynamics.has_value(), "{}: no \"dynamics\" block", sc.source);
+    io::ensure_writable_dir(out_dir);
+    check_frames_fit(sc, fine_model);
+    FineDynamics fine = with_fine_mass(fine_model, sc.dynamics->mass, {});
+    std::vector<std::string> methods;
+    for (const BuiltModel& m : coarse) methods.push_back(m.method);
+    const auto source = [&](const std::string& method) {
+        const auto it = std::find_if(coarse.begin(), coarse.end(),
+                                     [&](const BuiltModel& m) { return m.method == method; });
+        // Each model is stepped once: it moves into the run (and is freed after it).
+        return with_mass(std::move(it->model), fine, sc.source, method);
+    };
+    SimulateRun run = simulate_models(sc, fine, methods, source, out_dir, false);
+    write_summary(out_dir, run.summary);
+    failed += run.failed;
+    return run.summary;
 }
 
 int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, int count,
@@ -366,7 +591,9 @@ int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, i
     const OutputFolder folder(out_dir);
     const fs::path dir(out_dir);
     const fem::MassType mass = sc.dynamics ? sc.dynamics->mass : fem::MassType::Consistent;
-    FineDynamics fine = build_fine(sc, mass, read_seconds);
+    Timings timings;
+    const scene::FineModel model = build_fine(sc, read_seconds, timings);
+    FineDynamics fine = with_fine_mass(model, mass, std::move(timings));
     const scene::FineModel& fm = fine.model;
     sim::Modes fine_modes;
     {

@@ -1,7 +1,9 @@
 #pragma once
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "coarsegrain/coarsen/coarse_model.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
 namespace coarsegrain::app {
@@ -12,18 +14,57 @@ namespace coarsegrain::app {
 /// Files in DIR: fine.pvd with fine/frame_NNNNN.vtu, and <method>.pvd with
 /// <method>/frame_NNNNN.vtu per method (ParaView time series: displacement, its magnitude and,
 /// for a method, its error against the fine frame); trajectory.csv (time, then each model's
-/// probe displacements), trajectory.png (scripts/plot_trajectory.py); summary.json with "times",
-/// "probes" ([{point, u_fine: [[..] per time], u: [[..] per time]}], u with one method),
-/// "timings" {"fine": {factorize, per_step, ...}, "coarse": {build, mass, factorize, per_step}},
-/// "speedup" {"per_step"}, "errors" {"trajectory_l2_rel", "probe_max_rel"} and, with several
-/// methods, "methods": one such entry per method, named by "method". A method that fails is
-/// reported in its entry ("error") and the others still run.
+/// probe displacements), trajectory.png (scripts/plot_trajectory.py); animation_data.bin (the
+/// fine mesh's visible surface in a view plane and every model's displacement on it at up to
+/// kAnimationFrames of the saved frames, animation.hpp) and animation.gif from it
+/// (scripts/plot_animation.py); summary.json with "times", "probes" ([{point, u_fine: [[..] per
+/// time], u: [[..] per time]}], u with one method), "timings" {"fine": {factorize, per_step,
+/// write frames, animation, ...}, "coarse": {build, mass, factorize, per_step}}, "speedup"
+/// {"per_step"}, "errors" {"trajectory_l2_rel", "probe_max_rel", "phase": per probe
+/// sim::compare_phase on its dominant component} and, with several methods, "methods": one such
+/// entry per method, named by "method". A method that fails is reported in its entry ("error")
+/// and the others still run.
 /// @return the number of methods that failed
 /// @throws InvalidScene before any work if the scene has no "dynamics" block; Error if a method
 ///         cannot run on the scene (coarsen::validate_method) or the frames would not fit in
 ///         memory
 int run_simulate(const scene::Scene& scene, const std::vector<std::string>& methods,
                  const std::string& out_dir, double read_seconds);
+
+/// A coarse model built beforehand (by a static comparison) for the method named.
+struct BuiltModel {
+    std::string method;
+    coarsen::CoarseModel model;
+};
+
+/// The dynamic run of `coarsegrain demo`: run_simulate's stepping, comparison and files on models
+/// already built, the fine model (its mass is computed here; it must outlive the call) and the
+/// coarse models of the static comparison, which move into the run (each is freed once
+/// stepped). Writes every file of run_simulate to `out_dir` but the ParaView series and returns
+/// its summary (also written as out_dir/summary.json); print_simulate_table prints its table.
+/// @param[in,out] failed  incremented by the methods whose run failed (reported as run_simulate)
+/// @throws InvalidScene if the scene has no "dynamics" block; Error if the frames would not fit
+///         in memory or the folder cannot be written
+nlohmann::json simulate_built(const scene::Scene& scene, const scene::FineModel& fine,
+                              std::vector<BuiltModel> coarse, const std::string& out_dir,
+                              int& failed);
+
+/// A run's figures for a report (the demo's summary.json "dynamics" and report.md): "folder",
+/// "integrator", "dt", "steps", "start", "fine" {"dofs", "timings" {"per_step"}, "period": the
+/// first probe's fine period or null}, "methods" (each method's entry of the summary without
+/// its probe series and fine timings: "method", "coarse" {"dofs", "timings"}, "speedup",
+/// "errors" {"trajectory_l2_rel", "probe_max_rel", "phase"}; or "method" and "error"),
+/// "failed_methods", and "plots" (the pictures made, as paths below `folder`'s parent).
+/// @param summary  the run's summary (simulate_built)
+/// @param folder   the run's folder, relative to the report's
+nlohmann::json simulate_overview(const nlohmann::json& summary, const std::string& folder);
+
+/// The table of a run's summary (run_simulate, simulate_built) on stdout under the heading
+/// "<command>: <scene>, <integrator>, dt, steps": per model its DOFs, factorization and per-step
+/// seconds, per-step speedup, trajectory error and the lag of the first probe
+/// (errors.phase[0].lag, "-" if null).
+void print_simulate_table(const scene::Scene& scene, const nlohmann::json& summary,
+                          const std::string& command = "coarsegrain simulate");
 
 /// `coarsegrain modes`: the `count` lowest natural frequencies and modes of the fine model and
 /// of each method's coarse model (K φ = ω² M φ; the fine mass is dynamics.mass, consistent

@@ -34,6 +34,7 @@ mv "$tmp/stage" "$tmp/prefix"
 prefix=$tmp/prefix
 for f in bin/coarsegrain lib/libcoarsegrain.a include/coarsegrain/scene/scene.hpp \
          share/coarsegrain/scripts/plot_report.py share/coarsegrain/scripts/plot_mra.py \
+         share/coarsegrain/scripts/plot_animation.py \
          lib/cmake/coarsegrain/coarsegrainConfig.cmake \
          lib/cmake/coarsegrain/coarsegrainConfigVersion.cmake \
          lib/cmake/coarsegrain/coarsegrainTargets.cmake lib/cmake/coarsegrain/FindCHOLMOD.cmake; do

@@ -4,7 +4,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "cli/cli_test_util.hpp"
 
@@ -27,6 +29,14 @@ json identity_scene() {
     j["mesh"]["grid"]["cells"] = {4, 2, 2};
     j["coarse"] = {{"mesh", j["mesh"]}, {"mass", "galerkin"}};
     return with_dynamics(j);
+}
+
+/// The JSON header line of an animation_data.bin.
+json animation_header(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::string line;
+    std::getline(in, line);
+    return json::parse(line);
 }
 
 }  // namespace
@@ -74,6 +84,22 @@ TEST(CliSimulate, WritesTheContractKeysAndTheSeries) {
             }
         EXPECT_NEAR(m["errors"]["probe_max_rel"].get<double>(), diff / top, 1e-12);
         EXPECT_GE(m["errors"]["trajectory_l2_rel"].get<double>(), 0.0);
+        // One phase entry per probe; 0.8 s is about one period of this bar's bending, too short
+        // for two upward crossings: no periods, no lag.
+        ASSERT_EQ(m["errors"]["phase"].size(), 2u);
+        for (const json& ph : m["errors"]["phase"]) {
+            EXPECT_EQ(ph["component"], "z");
+            for (const char* key :
+                 {"crossings_fine", "crossings", "period_fine", "period", "period_rel", "lag"})
+                EXPECT_TRUE(ph.contains(key)) << key;
+            if (ph["crossings_fine"].get<int>() < 2) {
+                EXPECT_TRUE(ph["period_fine"].is_null());
+            }
+            if (ph["period"].is_null()) {
+                EXPECT_TRUE(ph["lag"].is_null());
+            }
+        }
+        EXPECT_EQ(m["timings"]["fine"], s["timings"]["fine"]);
         const std::string series = m["method"].get<std::string>();
         EXPECT_TRUE(std::filesystem::exists(dir + "/out/" + series + ".pvd"));
         EXPECT_TRUE(std::filesystem::exists(dir + "/out/" + series + "/frame_00010.vtu"));
@@ -81,6 +107,125 @@ TEST(CliSimulate, WritesTheContractKeysAndTheSeries) {
     EXPECT_TRUE(std::filesystem::exists(dir + "/out/fine.pvd"));
     EXPECT_TRUE(std::filesystem::exists(dir + "/out/fine/frame_00010.vtu"));
     EXPECT_TRUE(std::filesystem::exists(dir + "/out/trajectory.csv"));
+    EXPECT_THAT(r.output, ::testing::HasSubstr("lag p0"));
+
+    // The animation: every saved frame (11 <= 60), one panel per model.
+    EXPECT_EQ(s["plots"], json({"trajectory.png", "animation.gif"}));
+    EXPECT_TRUE(s["timings"]["fine"].contains("animation"));
+    EXPECT_EQ(s["animation_frames"], 11);
+    const json header = animation_header(dir + "/out/animation_data.bin");
+    EXPECT_EQ(header["models"], json({"fine", "effective-tensor", "mra"}));
+    // The soft bar sags by more than 2% of its size (1.06 of 2): drawn at true scale.
+    EXPECT_GT(header["max_displacement"].get<double>(), 0.04);
+    EXPECT_EQ(header["scale"], 1.0);
+    EXPECT_EQ(header["times"], s["times"]);
+    const GifInfo gif = read_gif(dir + "/out/animation.gif");
+    EXPECT_EQ(gif.error, "");
+    EXPECT_EQ(gif.frames, 11);
+    EXPECT_GE(gif.width, 400);
+    EXPECT_GE(gif.height, 300);
+    EXPECT_EQ(gif.delays_cs, std::vector<int>(11, 10));  // 10 frames per second
+}
+
+// More saved frames than the animation shows: 60 of them, evenly spaced with the first and the
+// last. The view drops the axis the bar moves least along (y: its loads are along -z) and draws
+// the boundary faces that face the viewer, the 8 x 4 hex faces at y = 0; the file's sizes are
+// those of the format (scripts/plot_animation.py). The bar is 1e4 times stiffer than the
+// contract test's, so that it moves far less than 2% of its size: it is drawn magnified.
+TEST(CliSimulate, AnimationShowsSixtyFramesOfTheFacingSurface) {
+    const std::string dir = temp_dir("cli_simulate_animation");
+    json j = small_scene();
+    for (const char* id : {"1", "2"})
+        j["materials"][id]["E"] = 1e4 * j["materials"][id]["E"].get<double>();
+    j["dynamics"] = {{"dt", 0.01}, {"steps", 130}};
+    const Result r = cli("simulate " + write_scene(dir, j) + " --out " + dir + "/out");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string data = dir + "/out/animation_data.bin";
+    const json h = animation_header(data);
+    EXPECT_EQ(h["format"], "coarsegrain-animation");
+    EXPECT_EQ(h["models"], json({"fine"}));
+    ASSERT_EQ(h["times"].size(), 60u);
+    EXPECT_EQ(h["times"][0].get<double>(), 0.0);
+    EXPECT_NEAR(h["times"][59].get<double>(), 1.3, 1e-12);
+    for (std::size_t k = 1; k < 60; ++k)  // saved frame round(k * 130 / 59): spacing 2 or 3 steps
+        EXPECT_NEAR(h["times"][k].get<double>() - h["times"][k - 1].get<double>(), 0.025, 0.0051);
+    EXPECT_EQ(h["axes"], json({"x", "z"}));
+    EXPECT_EQ(h["dropped"], "y");
+    EXPECT_EQ(h["faces"], 32);
+    EXPECT_EQ(h["face_size"], 4);
+    EXPECT_EQ(h["points"], 45);
+    EXPECT_EQ(h["body_size"], 2.0);
+    const double largest = h["max_displacement"], scale = h["scale"];
+    ASSERT_LT(largest, 0.04);  // below 2% of the body's size: drawn at 10%
+    EXPECT_NEAR(scale * largest, 0.2, 1e-12);
+    std::ifstream in(data, std::ios::binary);
+    std::string line;
+    std::getline(in, line);
+    const auto header_bytes = static_cast<std::uintmax_t>(line.size() + 1);
+    EXPECT_EQ(std::filesystem::file_size(data),
+              header_bytes + 4 * (45 * 2 + 32 * 4 + 60 * 45 * 3));  // rest, faces, frames
+    const GifInfo gif = read_gif(dir + "/out/animation.gif");
+    EXPECT_EQ(gif.error, "");
+    EXPECT_EQ(gif.frames, 60);
+}
+
+// A 2D body is drawn in its own plane, every element a polygon; above 4000 polygons only their
+// nodes are drawn, at most 4000 of them.
+TEST(CliSimulate, AnimationOfALarge2dMeshDrawsPoints) {
+    const std::string dir = temp_dir("cli_simulate_animation_2d");
+    const json j = json::parse(R"({
+      "dimension": 2,
+      "mesh": { "grid": { "min": [0,0], "max": [2,1], "cells": [80,60], "element": "quad" } },
+      "materials": { "0": { "E": 1000, "nu": 0.3, "density": 1 } },
+      "dirichlet": [ { "box": { "min": [-1e-9,-1], "max": [1e-9,2] } } ],
+      "loads": { "gravity": [0,-1] },
+      "dynamics": { "dt": 0.02, "steps": 10 }
+    })");
+    const Result r = cli("simulate " + write_scene(dir, j) + " --out " + dir + "/out");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const json h = animation_header(dir + "/out/animation_data.bin");
+    EXPECT_EQ(h["axes"], json({"x", "y"}));
+    EXPECT_TRUE(h["dropped"].is_null());
+    EXPECT_EQ(h["faces"], 0);  // 4800 elements
+    EXPECT_LE(h["points"].get<int>(), 4000);
+    EXPECT_GE(h["points"].get<int>(), 2000);  // 81 x 61 = 4941 nodes, every second one
+    const GifInfo gif = read_gif(dir + "/out/animation.gif");
+    EXPECT_EQ(gif.error, "");
+    EXPECT_EQ(gif.frames, 11);
+}
+
+// Without a usable Python the run succeeds, keeps the animation's data and says how to make it.
+TEST(CliSimulate, WithoutPythonTheRunSucceedsWithoutTheGif) {
+    const std::string dir = temp_dir("cli_simulate_no_python");
+    std::string output;
+    EXPECT_EQ(run("COARSEGRAIN_PYTHON=/nonexistent/python3 " + kCli + " --quiet simulate " +
+                      write_scene(dir, with_dynamics(small_scene())) + " --out " + dir + "/out",
+                  &output),
+              0)
+        << output;
+    EXPECT_THAT(output, ::testing::HasSubstr("note: animation.gif not made"));
+    EXPECT_THAT(output, ::testing::HasSubstr("plot_animation.py"));
+    const json s = read_json(dir + "/out/summary.json");
+    EXPECT_TRUE(s["plots"].empty());
+    EXPECT_FALSE(std::filesystem::exists(dir + "/out/animation.gif"));
+    EXPECT_TRUE(std::filesystem::exists(dir + "/out/animation_data.bin"));
+}
+
+TEST(CliSimulate, AnimationScriptRejectsATruncatedFile) {
+    const std::string dir = temp_dir("cli_animation_bad");
+    std::ofstream(dir + "/bad.bin")
+        << R"({"format": "coarsegrain-animation", "version": 1, "axes": ["x", "y"],)"
+        << R"( "dropped": null, "scale": 1, "models": ["fine"], "times": [0],)"
+        << R"( "points": 3, "faces": 1, "face_size": 3})"
+        << "\n"
+        << "short";
+    std::string output;
+    EXPECT_NE(run("/usr/bin/python3 " COARSEGRAIN_TEST_DATA "/../../scripts/plot_animation.py " +
+                      dir + "/x.gif " + dir + "/bad.bin",
+                  &output),
+              0);
+    EXPECT_THAT(output, ::testing::HasSubstr("the arrays do not have the sizes the header gives"));
+    EXPECT_FALSE(std::filesystem::exists(dir + "/x.gif"));
 }
 
 // The pipeline reproduces the fine dynamics when the coarse model is the fine model.
@@ -93,6 +238,36 @@ TEST(CliSimulate, CoarseMeshEqualToTheFineMeshReproducesTheFineTrajectory) {
     EXPECT_EQ(s["method"], "effective-tensor");
     EXPECT_LT(s["errors"]["trajectory_l2_rel"].get<double>(), 1e-10);
     EXPECT_LT(s["errors"]["probe_max_rel"].get<double>(), 1e-10);
+}
+
+// The phase figures of a coarse model equal to the fine one: the same crossings (period error
+// and lag 0 up to round-off), and the fine tip's period is that of the lowest mode of the same
+// mesh (`modes`). The bar is 4 times thinner in z than in y, so that its load along -z excites
+// mostly that mode (bending in z, 0.68 Hz; the next one, in y, is at 1.23 Hz). Measured: 0.9997
+// times the mode's period; midpoint lengthens periods by (ω dt)²/12 = 6e-4 and the other modes
+// shift the crossings a little: tolerance 3e-3.
+TEST(CliSimulate, PhaseOfACoarseModelEqualToTheFineOneIsExact) {
+    const std::string dir = temp_dir("cli_simulate_phase");
+    json j = identity_scene();
+    j["mesh"]["grid"]["max"] = {2, 1, 0.25};
+    j["mesh"]["grid"]["cells"] = {8, 4, 1};
+    j["coarse"]["mesh"] = j["mesh"];
+    j["probes"] = {{2, 0.5, 0.125}, {1, 0.5, 0.125}};
+    j["dynamics"] = {{"dt", 0.02}, {"steps", 300}};  // about 4 periods
+    const Result r =
+        cli("simulate " + write_scene(dir, j) + " --method effective-tensor --out " + dir + "/out");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const json tip = read_json(dir + "/out/summary.json")["errors"]["phase"][0];
+    EXPECT_EQ(tip["component"], "z");
+    ASSERT_GE(tip["crossings_fine"].get<int>(), 3);
+    EXPECT_EQ(tip["crossings"], tip["crossings_fine"]);
+    EXPECT_LT(std::abs(tip["period_rel"].get<double>()), 1e-9);
+    EXPECT_LT(std::abs(tip["lag"].get<double>()), 1e-9);
+    const Result m = cli("modes " + write_scene(dir, j) + " --count 2 --out " + dir + "/modes");
+    ASSERT_EQ(m.code, 0) << m.output;
+    const json f = read_json(dir + "/modes/summary.json")["fine"]["frequencies_hz"];
+    ASSERT_GT(f[1].get<double>(), 1.5 * f[0].get<double>());  // the modes are well apart
+    EXPECT_NEAR(tip["period_fine"].get<double>() * f[0].get<double>(), 1.0, 3e-3);
 }
 
 TEST(CliModes, CoarseMeshEqualToTheFineMeshReproducesTheFineFrequencies) {

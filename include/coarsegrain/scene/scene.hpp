@@ -174,7 +174,8 @@ class ProbeSampler {
 std::vector<Eigen::VectorXd> probe_displacements(const Scene& scene, const mesh::Mesh& mesh,
                                                  const Vector& u);
 
-/// The built-in demo scene (a layered composite hung from one face under gravity) as JSON.
+/// The built-in demo scene (a layered composite hung from one face under gravity, with a
+/// "dynamics" block: released from rest, about two periods of its lowest bending mode) as JSON.
 /// @param[in] scale  1 for the full demo (48x12x12 hexes); the grid is 16b x 4b x 4b with
 ///                   b = round(3 scale), at least 1 (tests use 0.25: 16x4x4)
 nlohmann::json demo_scene(double scale = 1.0);
