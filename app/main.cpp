@@ -183,17 +183,12 @@ int main(int argc, char** argv) {
         } else if (*simulate) {
             const cg::scene::Scene sc = cg::scene::load_scene(sim_scene);
             const double read = since_start();
-            const std::vector<std::string> methods = sim_methods.empty()
-                                                         ? std::vector<std::string>{}
-                                                         : selected_methods(sc, sim_methods);
-            failed = cg::app::run_simulate(sc, methods, sim_out, read);
+            failed = cg::app::run_simulate(sc, optional_methods(sc, sim_methods), sim_out, read);
         } else if (*modes) {
             const cg::scene::Scene sc = cg::scene::load_scene(modes_scene);
             const double read = since_start();
-            const std::vector<std::string> methods = modes_methods.empty()
-                                                         ? std::vector<std::string>{}
-                                                         : selected_methods(sc, modes_methods);
-            failed = cg::app::run_modes(sc, methods, modes_count, modes_out, read);
+            failed = cg::app::run_modes(sc, optional_methods(sc, modes_methods), modes_count,
+                                        modes_out, read);
         } else if (*demo) {
             const cg::scene::Scene sc =
                 cg::scene::parse_scene(cg::scene::demo_scene(demo_scale), "demo", "");
