@@ -8,6 +8,7 @@
 #include "coarsegrain/mra/hierarchy.hpp"
 #include "coarsegrain/sim/dynamics.hpp"
 #include "coarsegrain/sim/modes.hpp"
+#include "sim/layered_bar.hpp"
 
 using namespace coarsegrain;
 using nlohmann::json;
@@ -70,16 +71,7 @@ TEST(CoarseDynamics, CoarseMeshEqualToTheFineMeshGivesTheFineDynamics) {
 // The hierarchy's Galerkin mass, level by level (C̃^l X C̃^{l,T}), equals Φ^k X Φ^{k,T} with the
 // basis Φ^k formed explicitly (mra::basis), to round-off, at every level.
 TEST(CoarseDynamics, HierarchyGalerkinMassIsThePhiProduct) {
-    const scene::Scene sc = scene::parse_scene(
-        {{"dimension", 2},
-         {"mesh",
-          {{"grid", {{"min", {0, 0}}, {"max", {2, 1}}, {"cells", {16, 8}}, {"element", "quad"}}}}},
-         {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.25}, {"ids", {1, 2}}}}}},
-         {"materials",
-          {{"1", {{"E", 1000.0}, {"nu", 0.3}, {"density", 3.0}}},
-           {"2", {{"E", 1.0}, {"nu", 0.4}, {"density", 0.5}}}}},
-         {"dirichlet", {{{"box", {{"min", {-1e-9, -1}}, {"max", {1e-9, 2}}}}}}}},
-        "layers.json", "");
+    const scene::Scene sc = scene::parse_scene(test::layered_bar_json(), "layers.json", "");
     const scene::FineModel fine = scene::build_fine_model(sc);
     mra::Options o;
     o.levels = 3;

@@ -13,6 +13,7 @@
 #include "coarsegrain/mra/multilevel_solver.hpp"
 #include "coarsegrain/sim/dynamics.hpp"
 #include "coarsegrain/sim/modes.hpp"
+#include "sim/layered_bar.hpp"
 #include "test_util.hpp"
 
 using namespace coarsegrain;
@@ -20,19 +21,22 @@ using nlohmann::json;
 
 namespace {
 
-/// A 2D bar of stiff/heavy and soft/light layers (contrast 1000 in E, 6 in density), clamped at
-/// x = 0, under gravity, on 16x8 quads.
-json layered_bar_json() {
-    return {
-        {"dimension", 2},
-        {"mesh",
-         {{"grid", {{"min", {0, 0}}, {"max", {2, 1}}, {"cells", {16, 8}}, {"element", "quad"}}}}},
-        {"material_field", {{"layers", {{"axis", "x"}, {"thickness", 0.25}, {"ids", {1, 2}}}}}},
-        {"materials",
-         {{"1", {{"E", 1000.0}, {"nu", 0.3}, {"density", 3.0}}},
-          {"2", {{"E", 1.0}, {"nu", 0.4}, {"density", 0.5}}}}},
-        {"dirichlet", {{{"box", {{"min", {-1e-9, -1}}, {"max", {1e-9, 2}}}}}}},
-        {"loads", {{"gravity", {0, -1}}}}};
+/// The layered bar of layered_bar.hpp, its fine model and consistent mass, with a 3-level
+/// stiffness hierarchy and an implicit Euler step of dt = 1 configured.
+struct StepBar {
+    scene::Scene base;
+    scene::FineModel fine;
+    SparseMatrix M;
+};
+
+StepBar step_bar() {
+    json j = test::layered_bar_json();
+    j["coarse"] = {{"levels", 3}};
+    j["dynamics"] = {{"integrator", "implicit_euler"}, {"dt", 1.0}, {"steps", 1}};
+    StepBar b{scene::parse_scene(j, "layers.json", ""), {}, {}};
+    b.fine = scene::build_fine_model(b.base);
+    b.M = fem::mass_matrix(b.fine.mesh, b.fine.materials, fem::MassType::Consistent);
+    return b;
 }
 
 sim::DynamicsOptions step_options(sim::Integrator integrator, double dt, double damping) {
@@ -79,7 +83,7 @@ double run_difference(const sim::TimeStepper& a, const sim::TimeStepper& b, sim:
 // C̃/W products and the level factorizations (cond(S) ~ 1e3 here): 200 steps agree to 1e-9 (measured
 // 6e-13).
 TEST(StepHierarchy, AllLevelsReproduceTheFineTimeStepping) {
-    const scene::Scene sc = scene::parse_scene(layered_bar_json(), "layers.json", "");
+    const scene::Scene sc = scene::parse_scene(test::layered_bar_json(), "layers.json", "");
     const scene::FineModel fine = scene::build_fine_model(sc);
     const SparseMatrix M = fem::mass_matrix(fine.mesh, fine.materials, fem::MassType::Consistent);
     for (const auto& [integrator, damping] : {std::pair{sim::Integrator::Midpoint, 0.0},
@@ -102,7 +106,7 @@ TEST(StepHierarchy, AllLevelsReproduceTheFineTimeStepping) {
 // step operator M_c + c_C C_c + c_K K_c is then the hierarchy's coarsest operator A^1 (the
 // Galerkin product is linear in the operator), to round-off.
 TEST(StepHierarchy, CoarseStepOperatorIsTheCoarsestLevel) {
-    json j = layered_bar_json();
+    json j = test::layered_bar_json();
     j["coarse"] = {{"levels", 3}, {"operator", "step"}};
     j["dynamics"] = {{"integrator", "implicit_euler"},
                      {"dt", 0.05},
@@ -130,12 +134,10 @@ TEST(StepHierarchy, CoarseStepOperatorIsTheCoarsestLevel) {
 // (the bar's lowest period is 18.3; the basis functions are local, and these steps are already
 // long against the periods of motions on their support).
 TEST(StepHierarchy, LargeStepsTendToTheStiffnessHierarchy) {
-    json j = layered_bar_json();
-    j["coarse"] = {{"levels", 3}};
-    j["dynamics"] = {{"integrator", "implicit_euler"}, {"dt", 1.0}, {"steps", 1}};
-    const scene::Scene base = scene::parse_scene(j, "layers.json", "");
-    const scene::FineModel fine = scene::build_fine_model(base);
-    const SparseMatrix M = fem::mass_matrix(fine.mesh, fine.materials, fem::MassType::Consistent);
+    const StepBar bar = step_bar();
+    const scene::Scene& base = bar.base;
+    const scene::FineModel& fine = bar.fine;
+    const SparseMatrix& M = bar.M;
     const coarsen::CoarseModel stiffness = coarsen::build_coarse_model(base, fine, "mra-linear");
     const Matrix K_stiffness(stiffness.K), M_stiffness(stiffness.mass(M));
     std::vector<double> dts, K_differences, M_differences;
@@ -161,12 +163,10 @@ TEST(StepHierarchy, LargeStepsTendToTheStiffnessHierarchy) {
 // an upper bound at every dt, error falling as dt grows, above 100% at dt = 0.1 (T/180, a usual
 // fine step), and within 1e-3 of the stiffness basis's frequency at dt = 10 (measured 5e-5).
 TEST(StepHierarchy, ShortStepsStiffenTheLowestMode) {
-    json j = layered_bar_json();
-    j["coarse"] = {{"levels", 3}};
-    j["dynamics"] = {{"integrator", "implicit_euler"}, {"dt", 1.0}, {"steps", 1}};
-    const scene::Scene base = scene::parse_scene(j, "layers.json", "");
-    const scene::FineModel fine = scene::build_fine_model(base);
-    const SparseMatrix M = fem::mass_matrix(fine.mesh, fine.materials, fem::MassType::Consistent);
+    const StepBar bar = step_bar();
+    const scene::Scene& base = bar.base;
+    const scene::FineModel& fine = bar.fine;
+    const SparseMatrix& M = bar.M;
     const auto lowest = [&](const scene::Scene& sc) {
         const coarsen::CoarseModel c = coarsen::build_coarse_model(sc, fine, "mra-linear");
         return sim::modes(c.K, c.mass(M), c.bc, 1).frequencies_hz[0];
@@ -194,7 +194,7 @@ TEST(StepHierarchy, ShortStepsStiffenTheLowestMode) {
 // The operator needs the dynamics that define the step, and cell localization needs the
 // stiffness (its parts are element stiffness matrices): scene errors naming the key.
 TEST(StepHierarchy, SceneErrorsNameTheOperator) {
-    json j = layered_bar_json();
+    json j = test::layered_bar_json();
     j["coarse"] = {{"levels", 3}, {"operator", "step"}};
     const auto parse = [&] { return scene::parse_scene(j, "s.json", ""); };
     test::expect_error(parse, "coarse.operator");
