@@ -65,6 +65,24 @@ void Dirichlet::fix_component(const std::vector<Index>& nodes, int dim, int comp
     merge(*this, std::move(added));
 }
 
+IndexVector free_dofs(Index n, const Dirichlet& bc) {
+    for (std::size_t k = 0; k < bc.dofs.size(); ++k) {
+        const Index d = bc.dofs[k];
+        CG_VERIFY(d >= 0 && d < n, "Dirichlet DOF {} out of range 0..{}", d, n - 1);
+        CG_VERIFY(k == 0 || bc.dofs[k - 1] < d,
+                  "Dirichlet DOFs must be sorted and unique, got {} after {}", d, bc.dofs[k - 1]);
+    }
+    IndexVector free(n - static_cast<Index>(bc.dofs.size()));
+    auto fixed = bc.dofs.begin();
+    for (Index i = 0, next = 0; i < n; ++i) {
+        if (fixed != bc.dofs.end() && *fixed == i)
+            ++fixed;
+        else
+            free[next++] = i;
+    }
+    return free;
+}
+
 ReducedSystem reduce(const SparseMatrix& K, const Vector& f, const Dirichlet& bc) {
     const Index n = static_cast<Index>(K.rows());
     CG_VERIFY(K.cols() == n, "reduce: K is {}x{}, not square", K.rows(), K.cols());
@@ -72,25 +90,12 @@ ReducedSystem reduce(const SparseMatrix& K, const Vector& f, const Dirichlet& bc
     CG_VERIFY(static_cast<std::size_t>(bc.values.size()) == bc.dofs.size(),
               "reduce: {} Dirichlet DOFs but {} values", bc.dofs.size(), bc.values.size());
     CG_VERIFY(K.isCompressed(), "reduce: K must be in compressed storage (call makeCompressed)");
-    // map[i] = reduced index of DOF i, or -1 if DOF i is prescribed.
-    std::vector<Index> map(static_cast<std::size_t>(n), 0);
-    for (std::size_t k = 0; k < bc.dofs.size(); ++k) {
-        const Index d = bc.dofs[k];
-        CG_VERIFY(d >= 0 && d < n, "reduce: Dirichlet DOF {} out of range 0..{}", d, n - 1);
-        CG_VERIFY(k == 0 || bc.dofs[k - 1] < d,
-                  "reduce: Dirichlet DOFs must be sorted and unique, got {} after {}", d,
-                  bc.dofs[k - 1]);
-        map[d] = -1;
-    }
     ReducedSystem sys;
-    const Index nf = n - static_cast<Index>(bc.dofs.size());
-    sys.free_dofs.resize(nf);
-    Index next = 0;
-    for (Index i = 0; i < n; ++i)
-        if (map[i] >= 0) {
-            sys.free_dofs[next] = i;
-            map[i] = next++;
-        }
+    sys.free_dofs = free_dofs(n, bc);
+    const Index nf = sys.free_dofs.size();
+    // map[i] = reduced index of DOF i, or -1 if DOF i is prescribed.
+    std::vector<Index> map(static_cast<std::size_t>(n), -1);
+    for (Index r = 0; r < nf; ++r) map[sys.free_dofs[r]] = r;
     const Index* outer = K.outerIndexPtr();
     const Index* inner = K.innerIndexPtr();
     const double* values = K.valuePtr();

@@ -27,25 +27,6 @@ void check_sizes(const SparseMatrix& K, const SparseMatrix& M) {
               K.cols(), M.rows(), M.cols());
 }
 
-/// The DOFs of an n-DOF model that bc does not prescribe, ascending.
-IndexVector free_dofs(Index n, const fem::Dirichlet& bc) {
-    CG_VERIFY(static_cast<Index>(bc.dofs.size()) <= n,
-              "time stepping: {} Dirichlet DOFs for {} DOFs", bc.dofs.size(), n);
-    IndexVector free(n - static_cast<Index>(bc.dofs.size()));
-    Index next = 0;
-    auto fixed = bc.dofs.begin();
-    for (Index i = 0; i < n; ++i) {
-        if (fixed != bc.dofs.end() && *fixed == i) {
-            ++fixed;
-            continue;
-        }
-        CG_VERIFY(next < free.size(), "time stepping: Dirichlet DOFs not sorted, unique, < {}", n);
-        free[next++] = i;
-    }
-    CG_VERIFY(next == free.size(), "time stepping: Dirichlet DOFs not sorted, unique, < {}", n);
-    return free;
-}
-
 Vector restrict_to(const Vector& x, const IndexVector& dofs) {
     Vector r(dofs.size());
     for (Index i = 0; i < dofs.size(); ++i) r[i] = x[dofs[i]];
@@ -122,7 +103,7 @@ TimeStepper::TimeStepper(const SparseMatrix& K, const SparseMatrix& M, const fem
     : m_K(K), m_M(M), m_options(options) {
     validate(options);
     check_sizes(K, M);
-    m_free = free_dofs(K.rows(), bc);
+    m_free = fem::free_dofs(K.rows(), bc);
     m_solve = [solve = std::move(solve), free = m_free, n = K.rows()](const Vector& r) {
         const Vector x = solve(r);
         CG_VERIFY(x.size() == n, "time stepping: the step solve returned {} entries, not {}",

@@ -29,6 +29,10 @@ struct ReducedSystem {
     IndexVector free_dofs;  ///< reduced index -> full DOF
 };
 
+/// The DOFs of an n-DOF model that bc does not prescribe, ascending.
+/// @throws Error if bc.dofs is not sorted, unique and in 0..n-1
+IndexVector free_dofs(Index n, const Dirichlet& bc);
+
 /// Eliminates the Dirichlet DOFs from K u = f in O(nnz(K)): K_ff is copied column by column
 /// (K must be compressed, both triangles stored) and only the prescribed columns are read for
 /// K_fd u_d.
