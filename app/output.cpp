@@ -46,6 +46,21 @@ io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u) {
     return fields;
 }
 
+nlohmann::json newton_json(const sim::NewtonReport& report, const sim::CorotationOptions& options) {
+    nlohmann::json history = nlohmann::json::array();
+    for (const sim::NewtonIteration& it : report.history)
+        history.push_back(
+            {{"load_factor", it.load_factor}, {"residual", it.residual}, {"step", it.step}});
+    return {{"frame", fem::corotation_frame_name(options.frame)},
+            {"tangent", sim::tangent_name(options.tangent)},
+            {"tolerance", options.tolerance},
+            {"iterations", report.iterations},
+            {"increments", report.increments},
+            {"bisections", report.bisections},
+            {"residual", report.residual},
+            {"history", history}};
+}
+
 void print_warnings(const std::vector<std::string>& warnings) {
     for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 }

@@ -29,6 +29,10 @@ io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u);
 /// The fine static problem's sizes for summary.json "fine".
 nlohmann::json fine_sizes(const scene::FineModel& model);
 
+/// The corotated solve's figures for summary.json "newton": the frame, tolerance, iterations,
+/// increments, bisections, final residual and each iteration's load factor, residual and step.
+nlohmann::json newton_json(const sim::NewtonReport& report, const sim::CorotationOptions& options);
+
 /// One "warning: ..." line on stderr per warning (also under --quiet: they are not progress).
 void print_warnings(const std::vector<std::string>& warnings);
 

@@ -18,11 +18,21 @@ inline constexpr const char* kDemoDynamicsFolder = "dynamics";
 /// The fine side of a comparison, computed once for every method.
 struct FineRun {
     scene::FineModel model;
+    /// The fine solution every method is compared with: linear, or corotated with the scene's
+    /// "kinematics": "corotational".
     scene::StaticSolution solution;
-    Timings timings;  ///< read, assemble, factorize, solve, write
+    /// With corotated kinematics, the linear solution too (phase "linear solve"): the
+    /// hierarchy's level diagnostics are those of the linear operator.
+    std::optional<scene::StaticSolution> linear;
+    Timings timings;  ///< read, assemble, [newton,] factorize, solve, [linear solve,] write
     std::vector<Eigen::VectorXd> probes;
 
-    double factorize_and_solve() const { return timings["factorize"] + timings["solve"]; }
+    /// The solution's seconds: factorizations and solves, and Newton's evaluations.
+    double factorize_and_solve() const {
+        return timings["newton"] + timings["factorize"] + timings["solve"];
+    }
+    /// The solution the methods' fine comparisons (CoarseModel::compare_with_fine) use.
+    const scene::StaticSolution& linear_solution() const { return linear ? *linear : solution; }
 };
 
 /// One method's run against the fine run.

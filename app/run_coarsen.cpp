@@ -44,8 +44,14 @@ FineRun solve_fine(const scene::Scene& sc, const std::vector<std::string>& metho
     f.timings.add("read", read_seconds);
     f.model = scene::build_fine_model(sc, &f.timings);
     print_warnings(f.model.warnings);
-    f.solution = scene::solve_static(f.model, sc.solver, &f.timings,
-                                     coarsen::uses_fine_factorization(sc, f.model, methods));
+    const bool keep = coarsen::uses_fine_factorization(sc, f.model, methods);
+    if (sc.kinematics == sim::Kinematics::Corotational) {
+        f.solution = scene::solve_corotated(f.model, sc, &f.timings);
+        const Phase phase("linear solve", &f.timings);
+        f.linear = scene::solve_static(f.model, sc.solver, nullptr, keep);
+    } else {
+        f.solution = scene::solve_static(f.model, sc.solver, &f.timings, keep);
+    }
     f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
     return f;
 }
@@ -56,24 +62,51 @@ void write_fine(FineRun& f, const fs::path& dir) {
                   solution_fields(f.model, f.solution.u));
 }
 
-// Solves the coarse model and adds its "factorize" and "solve" seconds to `timings`. A coarse
-// solve of a few milliseconds is at the mercy of the scheduler (one descheduled OpenMP worker
-// costs more than the whole factorization), so short solves are repeated, up to 5 times and
-// 0.1 s in all, and the fastest run of each phase is reported.
+// summary.json "fine": sizes, timings and, if corotated, the Newton solve and the linear
+// solution's largest displacement and strain energy beside the corotated ones.
+nlohmann::json fine_json_of(const scene::Scene& sc, const FineRun& f) {
+    nlohmann::json j = fine_sizes(f.model);
+    j["timings"] = timings_json(f.timings);
+    if (f.solution.newton) j["newton"] = newton_json(*f.solution.newton, sc.corotation);
+    if (f.linear) {
+        j["linear_max_displacement"] = nodal_magnitude(f.linear->u, f.model.mesh.dim()).maxCoeff();
+        j["linear_strain_energy"] = f.linear->strain_energy;
+    }
+    return j;
+}
+
+// Solves the coarse model (corotated if the scene asks for it and the model has elements to
+// rotate, else linear) and adds its "newton", "factorize" and "solve" seconds to `timings`. A
+// coarse solve of a few milliseconds is at the mercy of the scheduler (one descheduled OpenMP
+// worker costs more than the whole factorization), so short solves are repeated, up to 5 times
+// and 0.1 s in all, and the fastest run of each phase is reported.
 coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
-                                           const solve::SolverOptions& options, Timings& timings) {
+                                           const scene::Scene& sc, Timings& timings) {
+    const bool corotated =
+        sc.kinematics == sim::Kinematics::Corotational && model.element_model.has_value();
+    const auto solve = [&](Timings* t) {
+        return corotated ? coarsen::solve_coarse_corotated(model, sc.corotation, sc.solver, t)
+                         : coarsen::solve_coarse(model, sc.solver, t);
+    };
+    const std::vector<std::string> phases = {"newton", "factorize", "solve"};
     Timings first;
-    coarsen::CoarseSolution s = coarsen::solve_coarse(model, options, &first);
-    double factorize = first["factorize"], solve = first["solve"], total = factorize + solve;
+    coarsen::CoarseSolution s = solve(&first);
+    std::vector<double> best;
+    double total = 0;
+    for (const std::string& p : phases) {
+        best.push_back(first[p]);
+        total += first[p];
+    }
     for (int repeat = 1; repeat < 5 && total < 0.1; ++repeat) {
         Timings t;
-        coarsen::solve_coarse(model, options, &t);
-        factorize = std::min(factorize, t["factorize"]);
-        solve = std::min(solve, t["solve"]);
-        total += t["factorize"] + t["solve"];
+        solve(&t);
+        for (std::size_t i = 0; i < phases.size(); ++i) {
+            best[i] = std::min(best[i], t[phases[i]]);
+            total += t[phases[i]];
+        }
     }
-    timings.add("factorize", factorize);
-    timings.add("solve", solve);
+    for (std::size_t i = 0; i < phases.size(); ++i)
+        if (best[i] > 0 || phases[i] != "newton") timings.add(phases[i], best[i]);
     return s;
 }
 
@@ -133,7 +166,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         coarsen::build_coarse_model(sc, fine, method, f.solution.factorization.get());
     if (write_fine_vtu) write_fine(f, dir);
     Timings tc = coarse.timings;
-    const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc.solver, tc);
+    const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc, tc);
     MethodResult r;
     r.method = method;
     r.errors = coarsen::compare(fine, u, uc.u_fine);
@@ -148,10 +181,10 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
     }
     nlohmann::json coarse_json = method_json(coarse.report);
     const nlohmann::json plots =
-        compare_with_fine(coarse, sc, fine, f.solution, dir, coarse_json, tc);
+        compare_with_fine(coarse, sc, fine, f.linear_solution(), dir, coarse_json, tc);
     r.dofs = coarse.K.rows();
     r.build_seconds = sum(coarse.timings);
-    r.factorize_and_solve = tc["factorize"] + tc["solve"];
+    r.factorize_and_solve = tc["newton"] + tc["factorize"] + tc["solve"];
     r.speedup = f.factorize_and_solve() / r.factorize_and_solve;
     coarse_json["nodes"] = coarse.nodes;
     coarse_json["elements"] = coarse.elements;
@@ -160,8 +193,10 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
     coarse_json["nonzeros"] = coarse.K.nonZeros();
     coarse_json["timings"] = timings_json(tc);
     coarse_json["timings"]["build"] = r.build_seconds;
-    nlohmann::json fine_json = fine_sizes(fine);
-    fine_json["timings"] = timings_json(f.timings);
+    coarse_json["kinematics"] =
+        sim::kinematics_name(uc.newton ? sim::Kinematics::Corotational : sim::Kinematics::Linear);
+    if (uc.newton) coarse_json["newton"] = newton_json(*uc.newton, sc.corotation);
+    nlohmann::json fine_json = fine_json_of(sc, f);
     r.summary = {
         {"command", "coarsen"},
         {"method", method},
@@ -177,7 +212,8 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         {"speedup",
          {{"solve", f.timings["solve"] / tc["solve"]}, {"factorize_and_solve", r.speedup}}},
         {"max_displacement", nodal_magnitude(uc.u_fine, dim).maxCoeff()},
-        {"strain_energy", 0.5 * uc.u.dot(coarse.K * uc.u)},
+        {"kinematics", sim::kinematics_name(sc.kinematics)},
+        {"strain_energy", uc.strain_energy},
         {"compliance", coarse.f.dot(uc.u)},
         {"fine_max_displacement", nodal_magnitude(u, dim).maxCoeff()},
         {"fine_strain_energy", f.solution.strain_energy},
@@ -258,6 +294,7 @@ Comparison compare_methods(const scene::Scene& sc, const std::vector<std::string
     for (const std::string& method : methods)
         c.results.push_back(try_method(sc, c.fine, method, dir, keep_models));
     c.fine.solution.factorization.reset();  // used by the methods only
+    if (c.fine.linear) c.fine.linear->factorization.reset();
     write_fine(c.fine, dir);
     return c;
 }
@@ -270,8 +307,7 @@ int finish_comparison(const scene::Scene& sc, const std::string& command, const 
     const FineRun& f = c.fine;
     const std::vector<MethodResult>& results = c.results;
     const nlohmann::json plots = write_report(sc, command, f, results, dir, dynamics);
-    nlohmann::json fine_json = fine_sizes(f.model);
-    fine_json["timings"] = timings_json(f.timings);
+    const nlohmann::json fine_json = fine_json_of(sc, f);
     nlohmann::json rows = nlohmann::json::array();
     int failed = 0;
     for (const MethodResult& r : results) {
@@ -297,6 +333,7 @@ int finish_comparison(const scene::Scene& sc, const std::string& command, const 
         {"fine", fine_json},
         {"solver", solve::backend_name(sc.solver.backend)},
         {"threads", omp_get_max_threads()},
+        {"kinematics", sim::kinematics_name(sc.kinematics)},
         {"probes", probes_json(sc, f.probes)},
         {"warnings", f.model.warnings},
         {"max_displacement", nodal_magnitude(f.solution.u, f.model.mesh.dim()).maxCoeff()},

@@ -548,6 +548,10 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
                  "{}: simulate needs a \"dynamics\" block (at least \"dt\" and \"steps\"; "
                  "docs/guide.md, \"Dynamics\")",
                  sc.source);
+    CG_VERIFY_AS(InvalidScene, sc.kinematics == sim::Kinematics::Linear,
+                 "{}: kinematics: simulate steps linear models only; \"corotational\" applies "
+                 "to solve and coarsen (static equilibrium)",
+                 sc.source);
     check_methods(sc, methods);
     const OutputFolder folder(out_dir);
     Timings timings;

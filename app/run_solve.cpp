@@ -17,7 +17,9 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
     t.add("read", read_seconds);
     const scene::FineModel model = scene::build_fine_model(sc, &t);
     print_warnings(model.warnings);
-    const scene::StaticSolution sol = scene::solve_static(model, sc.solver, &t);
+    const bool corotated = sc.kinematics == sim::Kinematics::Corotational;
+    const scene::StaticSolution sol = corotated ? scene::solve_corotated(model, sc, &t)
+                                                : scene::solve_static(model, sc.solver, &t);
     const int dim = model.mesh.dim();
     const std::vector<Eigen::VectorXd> probes = scene::probe_displacements(sc, model.mesh, sol.u);
     const double max_u = nodal_magnitude(sol.u, dim).maxCoeff();
@@ -28,19 +30,22 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
     }
     nlohmann::json fine = fine_sizes(model);
     fine["timings"] = timings_json(t);
-    write_summary(out_dir, {
-                               {"command", "solve"},
-                               {"scene", sc.source},
-                               {"fine", fine},
-                               {"solver", solve::backend_name(sc.solver.backend)},
-                               {"threads", omp_get_max_threads()},
-                               {"probes", probes_json(sc, probes)},
-                               {"warnings", model.warnings},
-                               {"max_displacement", max_u},
-                               {"strain_energy", sol.strain_energy},
-                               {"compliance", model.f.dot(sol.u)},
-                               {"peak_memory_mb", peak_rss_mb()},
-                           });
+    nlohmann::json summary = {
+        {"command", "solve"},
+        {"scene", sc.source},
+        {"fine", fine},
+        {"solver", solve::backend_name(sc.solver.backend)},
+        {"threads", omp_get_max_threads()},
+        {"kinematics", sim::kinematics_name(sc.kinematics)},
+        {"probes", probes_json(sc, probes)},
+        {"warnings", model.warnings},
+        {"max_displacement", max_u},
+        {"strain_energy", sol.strain_energy},
+        {"compliance", model.f.dot(sol.u)},
+        {"peak_memory_mb", peak_rss_mb()},
+    };
+    if (sol.newton) summary["newton"] = newton_json(*sol.newton, sc.corotation);
+    write_summary(out_dir, summary);
 
     std::printf("coarsegrain solve: %s\n", sc.source.c_str());
     std::printf("  mesh      %dD %s, %d nodes, %d elements, %d DOFs (%d free)\n", dim,
@@ -50,6 +55,12 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
     std::printf("  %-12s %9s\n", "phase", "seconds");
     for (const auto& [phase, seconds] : t.entries())
         std::printf("  %-12s %9.3f\n", phase.c_str(), seconds);
+    if (sol.newton)
+        std::printf(
+            "  corotated (%s frame): %d Newton iterations, %d load increments, "
+            "relative residual %.2e\n",
+            fem::corotation_frame_name(sc.corotation.frame).c_str(), sol.newton->iterations,
+            sol.newton->increments, sol.newton->residual);
     std::printf("  max |u|       %.6g\n  strain energy %.6g\n", max_u, sol.strain_energy);
     for (std::size_t i = 0; i < probes.size(); ++i)
         std::printf("  u(%s) = (%s)\n", fmt::format("{:g}", fmt::join(sc.probes[i], ", ")).c_str(),

@@ -7,9 +7,9 @@
 #
 # The library is static (the default; BUILD_SHARED_LIBS=ON builds a shared one): a consumer
 # links its private dependencies too, so the exported target lists them as
-# $<LINK_ONLY:CHOLMOD::CHOLMOD> and $<LINK_ONLY:LAPACK::LAPACK> (CMake does this for every
-# PRIVATE dependency of a static library), and coarsegrainConfig.cmake finds them, CHOLMOD
-# with the FindCHOLMOD.cmake installed beside it.
+# $<LINK_ONLY:CHOLMOD::CHOLMOD>, $<LINK_ONLY:UMFPACK::UMFPACK> and $<LINK_ONLY:LAPACK::LAPACK>
+# (CMake does this for every PRIVATE dependency of a static library), and coarsegrainConfig.cmake
+# finds them, CHOLMOD and UMFPACK with the Find modules installed beside it.
 include(CMakePackageConfigHelpers)
 
 set(COARSEGRAIN_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/coarsegrain)
@@ -36,4 +36,5 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/coarsegrainConfigVersion.
 install(FILES ${PROJECT_BINARY_DIR}/coarsegrainConfig.cmake
               ${PROJECT_BINARY_DIR}/coarsegrainConfigVersion.cmake
               ${PROJECT_SOURCE_DIR}/cmake/FindCHOLMOD.cmake
+              ${PROJECT_SOURCE_DIR}/cmake/FindUMFPACK.cmake
         DESTINATION ${COARSEGRAIN_INSTALL_CMAKEDIR})

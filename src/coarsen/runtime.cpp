@@ -58,6 +58,39 @@ CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions
               model.K.rows(), model.K.cols(), model.f.size(), model.to_fine.cols());
     CoarseSolution s;
     s.u = fem::solve_static(model.K, model.f, model.bc, options, timings);
+    s.strain_energy = 0.5 * s.u.dot(model.K * s.u);
+    s.u_fine = model.to_fine * s.u;
+    return s;
+}
+
+CoarseSolution solve_coarse_corotated(const CoarseModel& model,
+                                      const sim::CorotationOptions& corotation,
+                                      const solve::SolverOptions& options, Timings* timings) {
+    CG_VERIFY(model.element_model.has_value(),
+              "coarse model {}: corotated kinematics need an element model (a coarse mesh and "
+              "its tensors); the hierarchy's coarse DOFs are none",
+              model.method);
+    const Index n = model.K.rows();
+    CG_VERIFY(model.f.size() == n && model.to_fine.cols() == n,
+              "coarse model {}: K is {}x{}, f has {} entries, to_fine has {} columns", model.method,
+              model.K.rows(), model.K.cols(), model.f.size(), model.to_fine.cols());
+    const ElementModel& e = *model.element_model;
+    solve::SolverOptions node_options = options;
+    node_options.node_dofs = e.dof_map.size() == 0 ? e.mesh.dim() : 1;
+    const fem::CorotatedModel corotated(e.mesh, e.materials, fem::Formulation::Standard,
+                                        corotation.frame, e.dof_map);
+    CG_VERIFY(corotated.num_dofs() == n, "coarse model {}: {} element model DOFs for {} DOFs",
+              model.method, corotated.num_dofs(), n);
+    CoarseSolution s;
+    try {
+        sim::CorotatedSolution c = sim::solve_corotated_static(corotated, model.f, model.bc,
+                                                               corotation, node_options, timings);
+        s.u = std::move(c.u);
+        s.strain_energy = c.energy;
+        s.newton = std::move(c.report);
+    } catch (const Error& error) {
+        throw Error(fmt::format("coarse model {}: {}", model.method, error.what()));
+    }
     s.u_fine = model.to_fine * s.u;
     return s;
 }

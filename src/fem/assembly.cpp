@@ -10,12 +10,14 @@
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/element.hpp"
 #include "element_kernels.hpp"
+#include "gather.hpp"
 #include "mesh_graph.hpp"
 
 namespace coarsegrain::fem {
 
 namespace {
 
+using detail::Skeleton;
 using mesh::ElementType;
 
 /// True when every element is a congruent, equally oriented copy of the grid cell (make_grid).
@@ -31,64 +33,6 @@ kernels::Coords<S> grid_cell(const mesh::GridInfo& grid) {
     for (int a = 0; a < S::npe; ++a)
         for (int d = 0; d < S::dim; ++d) X(a, d) = S::kCorners[a][d] * h[d];
     return X;
-}
-
-/// Everything the scatter needs: incidence, adjacency and the empty compressed matrix A (held
-/// by reference: Eigen 3.4's SparseMatrix has no move constructor, so the result is built in
-/// the caller's variable to avoid copying hundreds of MB).
-struct Skeleton {
-    detail::NodeElements incidence;
-    detail::NodeGraph graph;
-    SparseMatrix& A;
-};
-
-/// zero = false leaves the values uninitialized: gather() writes every entry.
-Skeleton skeleton(const mesh::Mesh& mesh, bool full_blocks, bool zero, SparseMatrix& A) {
-    Skeleton s{detail::node_elements(mesh), {}, A};
-    s.graph = detail::node_graph(mesh, s.incidence);
-    detail::block_pattern(s.graph, mesh.dim(), full_blocks, zero, A);
-    return s;
-}
-
-/// Gathers precomputed element matrices into the columns of each node (one node per iteration,
-/// so threads write disjoint columns: race free without colouring). Ke(e) returns the element
-/// matrix of element e (a reference into a small cache). Full dim x dim blocks if Full, else
-/// the scalar matrix Ke(e)(a, b) on the diagonal of each block. The node's columns are zeroed
-/// here (they are contiguous and stay in cache), so the pattern need not be.
-template <class S, bool Full, class ElementMatrixOf>
-void gather(const mesh::Mesh& mesh, Skeleton& s, ElementMatrixOf&& Ke) {
-    constexpr int dim = S::dim;
-    constexpr int per_block = Full ? dim : 1;
-    const Index nv = mesh.num_nodes();
-    const Index* outer = s.A.outerIndexPtr();
-    double* values = s.A.valuePtr();
-#pragma omp parallel if (nv >= detail::kMinParallel)
-    {
-        // position[w] = index of node w in the adjacency list of the current node.
-        std::vector<Index> position(static_cast<std::size_t>(nv), 0);
-#pragma omp for schedule(static)
-        for (Index v = 0; v < nv; ++v) {
-            const Index first = s.graph.ptr[v];
-            for (Index p = first; p < s.graph.ptr[v + 1]; ++p) position[s.graph.adj[p]] = p - first;
-            std::fill(values + outer[dim * v], values + outer[dim * v + dim], 0.0);
-            for (Index k = s.incidence.ptr[v]; k < s.incidence.ptr[v + 1]; ++k) {
-                const Index e = s.incidence.element[k];
-                const int b = s.incidence.local[k];
-                const auto& K = Ke(e);
-                for (int a = 0; a < S::npe; ++a) {
-                    const Index offset = per_block * position[mesh.elements(e, a)];
-                    for (int j = 0; j < dim; ++j) {
-                        double* col = values + outer[dim * v + j] + offset;
-                        if constexpr (Full) {
-                            for (int i = 0; i < dim; ++i) col[i] += K(dim * a + i, dim * b + j);
-                        } else {
-                            col[0] += K(a, b);
-                        }
-                    }
-                }
-            }
-        }
-    }
 }
 
 /// Adds the columns of node b (local index) of element matrix K of element e.
@@ -223,15 +167,16 @@ SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMat
         };
         SparseMatrix K;
         const bool cached = congruent_grid(mesh);
-        Skeleton s = skeleton(mesh, true, !cached, K);
+        Skeleton s = detail::skeleton(mesh, true, !cached, K);
         if constexpr (!S::simplex) {
             if (cached) {
                 const kernels::Coords<S> X = grid_cell<S>(*mesh.grid);
                 std::vector<kernels::ElementMatrix<S>> cache;
                 for (const material::Material& m : mats.table)
                     cache.push_back(element_matrix(X, m.C.topLeftCorner<n, n>()));
-                gather<S, true>(mesh, s, [&](Index e) -> const kernels::ElementMatrix<S>& {
-                    return cache[static_cast<std::size_t>(mats.index[e])];
+                detail::gather<S, true>(mesh, s, [&](Index e, int b) {
+                    return cache[static_cast<std::size_t>(mats.index[e])]
+                        .template middleCols<S::dim>(S::dim * b);
                 });
                 return K;
             }
@@ -284,14 +229,14 @@ SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterial
             return M;
         }
         const bool cached = congruent_grid(mesh);
-        Skeleton s = skeleton(mesh, false, !cached, M);
+        Skeleton s = detail::skeleton(mesh, false, !cached, M);
         if constexpr (!S::simplex) {
             if (cached) {
                 const Scalar cell = kernels::scalar_mass<S>(grid_cell<S>(*mesh.grid), 1.0);
                 std::vector<Scalar> cache;
                 for (const material::Material& m : mats.table) cache.push_back(m.density * cell);
-                gather<S, false>(mesh, s, [&](Index e) -> const Scalar& {
-                    return cache[static_cast<std::size_t>(mats.index[e])];
+                detail::gather<S, false>(mesh, s, [&](Index e, int b) {
+                    return cache[static_cast<std::size_t>(mats.index[e])].col(b);
                 });
                 return M;
             }

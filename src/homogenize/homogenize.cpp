@@ -406,6 +406,8 @@ coarsen::CoarseModel coarse_model(const scene::Scene& scene, const scene::FineMo
         report.fixed_dofs = carried.fixed;
         report.constrained_dofs = carried.constrained;
         report.combinations = carried.combinations;
+        m.element_model = coarsen::ElementModel{
+            c.coarse, mats, carried.constrained > 0 ? carried.T : SparseMatrix()};
         m.mass = coarse_mass(c.options.mass, std::move(P),
                              carried.constrained > 0 ? carried.T : SparseMatrix(), c.coarse, mats);
     }

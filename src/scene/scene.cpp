@@ -286,7 +286,8 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     const JsonReader root(j, "", s.source);
     root.require_object();
     root.allow_only({"description", "dimension", "mesh", "materials", "material_field", "plane",
-                     "dirichlet", "loads", "probes", "fem", "solver", "coarse", "dynamics"});
+                     "dirichlet", "loads", "probes", "fem", "solver", "coarse", "dynamics",
+                     "kinematics", "corotation"});
     // Everything that needs no mesh first, so that a bad option fails before a mesh is read.
     std::optional<int> dimension;
     if (auto d = root.find("dimension")) dimension = static_cast<int>(d->integer(2, 3));
@@ -320,6 +321,18 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     }
     if (auto c = root.find("coarse")) s.coarse = parse_coarse_options(c->json(), s.source);
     if (auto d = root.find("dynamics")) s.dynamics = parse_dynamics_options(d->json(), s.source);
+    if (auto k = root.find("kinematics")) {
+        const std::string v = k->string();
+        k->fail_unless(v == "linear" || v == "corotational",
+                       "unknown value \"{}\"; expected \"linear\" or \"corotational\"", v);
+        s.kinematics = v == "linear" ? sim::Kinematics::Linear : sim::Kinematics::Corotational;
+    }
+    if (auto c = root.find("corotation")) {
+        c->fail_unless(s.kinematics == sim::Kinematics::Corotational,
+                       "applies to \"kinematics\": \"corotational\" only; add that key or "
+                       "remove this block");
+        s.corotation = parse_corotation_options(c->json(), s.source);
+    }
     if (s.coarse.mra.fine_operator == mra::Operator::Step)
         root.at("coarse")
             .at("operator")
@@ -615,14 +628,14 @@ std::string singular_cause(const FineModel& model, bool& held) {
 
 }  // namespace
 
-StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
-                            Timings* timings, bool keep_factorization) {
-    solve::SolverOptions node_options = options;
-    node_options.node_dofs = model.mesh.dim();  // K is interleaved per node
-    StaticSolution s;
-    auto solver = std::make_shared<solve::SpdSolver>(node_options);
+namespace {
+
+/// Runs solve(), which solves with the model's stiffness or tangent, and explains a singular
+/// model (NotPositiveDefinite, or conjugate gradients failing for that cause) by its cause.
+template <class Solve>
+void explaining_singular(const FineModel& model, Solve&& solve) {
     try {
-        s.u = fem::solve_static(model.K, model.f, model.bc, *solver, timings);
+        solve();
     } catch (const NotPositiveDefinite& e) {
         bool held = false;
         const std::string cause = singular_cause(model, held);
@@ -640,8 +653,43 @@ StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& 
                                                   solve::without_singular_hint(e.what())));
         throw;
     }
+}
+
+}  // namespace
+
+StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
+                            Timings* timings, bool keep_factorization) {
+    solve::SolverOptions node_options = options;
+    node_options.node_dofs = model.mesh.dim();  // K is interleaved per node
+    StaticSolution s;
+    auto solver = std::make_shared<solve::SpdSolver>(node_options);
+    explaining_singular(
+        model, [&] { s.u = fem::solve_static(model.K, model.f, model.bc, *solver, timings); });
     s.strain_energy = fem::strain_energy(model.K, s.u);
     if (keep_factorization) s.factorization = std::move(solver);
+    return s;
+}
+
+StaticSolution solve_corotated(const FineModel& model, const Scene& scene, Timings* timings) {
+    solve::SolverOptions node_options = scene.solver;
+    node_options.node_dofs = model.mesh.dim();
+    const fem::CorotatedModel corotated(model.mesh, model.materials, scene.formulation,
+                                        scene.corotation.frame);
+    StaticSolution s;
+    explaining_singular(model, [&] {
+        try {
+            sim::CorotatedSolution c = sim::solve_corotated_static(
+                corotated, model.f, model.bc, scene.corotation, node_options, timings);
+            s.u = std::move(c.u);
+            s.strain_energy = c.energy;
+            s.newton = std::move(c.report);
+        } catch (const solve::NotConverged& e) {
+            // Newton's own failure is no singular model: keep it from explaining_singular.
+            if (std::string(e.what()).starts_with("corotated solve"))
+                throw Error(fmt::format("{}: {}", model.source, e.what()));
+            throw;  // conjugate gradients inside an iteration
+        }
+    });
     return s;
 }
 

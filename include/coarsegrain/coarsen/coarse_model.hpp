@@ -4,6 +4,7 @@
 /// CoarseModel and carries its solution to the fine mesh, so every comparison (the effective
 /// tensors, the material-adapted hierarchy, the naive/Voigt/Reuss baselines) is the same code.
 #include <functional>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -96,6 +97,16 @@ struct FineComparison {
 using CompareWithFine = std::function<FineComparison(
     const scene::Scene& scene, const scene::FineModel& fine, const scene::StaticSolution& u)>;
 
+/// The coarse mesh and element materials behind an element model's stiffness (the effective
+/// tensors and the baselines): K = Tᵀ K(mesh, materials) T with T = dof_map (mesh DOFs x coarse
+/// DOFs; empty: the identity). Corotated kinematics rotate these elements, each with its own
+/// (anisotropic) tensor (fem::CorotatedModel).
+struct ElementModel {
+    mesh::Mesh mesh;
+    material::ElementMaterials materials;
+    SparseMatrix dof_map;
+};
+
 /// A coarse model: an operator on coarse DOFs, its load and conditions, and the linear map that
 /// carries a coarse displacement to the fine nodes.
 struct CoarseModel {
@@ -112,6 +123,9 @@ struct CoarseModel {
     /// defines none. Effective tensors and baselines: by coarse.mass (homogenize::CoarseMass);
     /// mra: the Galerkin mass through the hierarchy.
     std::function<SparseMatrix(const SparseMatrix& M)> mass;
+    /// The element model behind K, if it is one (empty for mra, whose coarse DOFs are no
+    /// element model: corotated kinematics solve it linear).
+    std::optional<ElementModel> element_model;
     Timings timings;      ///< build phases; their sum is reported as coarse.timings.build
     MethodReport report;  ///< method figures for summary "coarse"
     std::vector<VtuOutput> outputs;  ///< extra files for the output folder

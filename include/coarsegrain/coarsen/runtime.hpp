@@ -1,17 +1,22 @@
 #pragma once
 /// @file The one runtime for every coarse model: a static solve on the coarse DOFs, carried to the
 /// fine mesh, and its comparison with the fine solution (DESIGN.md "summary.json").
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "coarsegrain/coarsen/coarse_model.hpp"
+#include "coarsegrain/sim/corotational.hpp"
 
 namespace coarsegrain::coarsen {
 
 /// A coarse static solution.
 struct CoarseSolution {
-    Vector u;       ///< coarse DOFs, Dirichlet values included
-    Vector u_fine;  ///< to_fine * u: the coarse solution on the fine nodes
+    Vector u;                  ///< coarse DOFs, Dirichlet values included
+    Vector u_fine;             ///< to_fine * u: the coarse solution on the fine nodes
+    double strain_energy = 0;  ///< ½ uᵀ K u, or the corotated energy W(u)
+    /// How the Newton solve went, if the solution is corotated (solve_coarse_corotated).
+    std::optional<sim::NewtonReport> newton;
 };
 
 /// Solves K u = f on the coarse DOFs with model.bc eliminated (fem::solve_static) and maps u to
@@ -19,6 +24,16 @@ struct CoarseSolution {
 /// @throws Error if the model's sizes disagree; NotPositiveDefinite if it does not hold
 CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions& options,
                             Timings* timings = nullptr);
+
+/// Solves the coarse model with corotated kinematics: sim::solve_corotated_static on its element
+/// model (CoarseModel::element_model, each element rotating its own tensor) with model.f and
+/// model.bc, and maps u to the fine nodes. Phases "newton", "factorize" and "solve".
+/// @throws Error if the model has no element model (mra) or its sizes disagree; as
+///         sim::solve_corotated_static, naming the method
+CoarseSolution solve_coarse_corotated(const CoarseModel& model,
+                                      const sim::CorotationOptions& corotation,
+                                      const solve::SolverOptions& options,
+                                      Timings* timings = nullptr);
 
 /// How far a coarse solution carried to the fine mesh, u_c, is from the fine solution u.
 struct Errors {

@@ -21,6 +21,7 @@
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/mesh/point_locator.hpp"
 #include "coarsegrain/mra/options.hpp"
+#include "coarsegrain/sim/corotational.hpp"
 #include "coarsegrain/sim/dynamics.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 
@@ -78,6 +79,11 @@ struct Scene {
     CoarseOptions coarse;
     /// "dynamics": time stepping of `coarsegrain simulate` (absent: none; simulate requires it).
     std::optional<sim::DynamicsOptions> dynamics;
+    /// "kinematics": "linear" (default) or "corotational" (Kharevych et al. 2009, Sec. 4): the
+    /// fine model and every coarse element model are solved corotated.
+    sim::Kinematics kinematics = sim::Kinematics::Linear;
+    /// "corotation": the frame and the Newton solve of corotated kinematics.
+    sim::CorotationOptions corotation;
     /// Folder that relative file names in the scene are resolved against.
     std::string base_dir;
 };
@@ -91,6 +97,11 @@ CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::stri
 /// @throws InvalidScene naming dynamics.<key>, the expected values and `source`
 sim::DynamicsOptions parse_dynamics_options(const nlohmann::json& dynamics,
                                             const std::string& source);
+
+/// Parses and validates a "corotation" block.
+/// @throws InvalidScene naming corotation.<key>, the expected values and `source`
+sim::CorotationOptions parse_corotation_options(const nlohmann::json& corotation,
+                                                const std::string& source);
 
 /// Parses scene JSON text. Rejects duplicate keys (naming the key's path: a repeated key
 /// would otherwise silently win) and numbers beyond double range.
@@ -143,6 +154,9 @@ struct StaticSolution {
     /// The factorization of K_ff, the stiffness without the Dirichlet DOFs (FineModel::bc.dofs,
     /// fem::reduce), if kept: for further solves or the spectrum of the same operator.
     std::shared_ptr<const solve::SpdSolver> factorization;
+    /// How the Newton solve went, if the solution is corotated (solve_corotated); strain_energy
+    /// is then the corotated energy W(u).
+    std::optional<sim::NewtonReport> newton;
 };
 
 /// Solves K u = f with the Dirichlet conditions eliminated. Phases "factorize" and "solve".
@@ -154,6 +168,14 @@ struct StaticSolution {
 ///         of these causes (contrast from 1e10) -- otherwise their NotConverged
 StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& options,
                             Timings* timings = nullptr, bool keep_factorization = false);
+
+/// Solves the scene's fine model with corotated kinematics (Kharevych et al. 2009, Sec. 4):
+/// sim::solve_corotated_static with the scene's formulation, "corotation" options and solver
+/// (node-blocked ordering). Phases "newton", "factorize" and "solve".
+/// @throws NotPositiveDefinite as solve_static; Error naming the source if Newton's method
+///         fails at the smallest load increment
+StaticSolution solve_corotated(const FineModel& model, const Scene& scene,
+                               Timings* timings = nullptr);
 
 /// The scene's probes located once on a mesh, to sample many displacement fields (the frames
 /// of a time series).

@@ -1,0 +1,36 @@
+// The "corotation" block of a scene (scene.hpp, Scene::corotation), parsed and validated before
+// the mesh is read.
+#include "coarsegrain/scene/scene.hpp"
+#include "json_reader.hpp"
+
+namespace coarsegrain::scene {
+
+sim::CorotationOptions parse_corotation_options(const nlohmann::json& corotation,
+                                                const std::string& source) {
+    const JsonReader r(corotation, "corotation", source);
+    r.allow_only({"frame", "tangent", "tolerance", "max_iterations", "max_bisections"});
+    sim::CorotationOptions o;
+    if (auto v = r.find("frame")) {
+        const std::string s = v->string();
+        v->fail_unless(s == "de_veubeke" || s == "polar",
+                       "unknown value \"{}\"; expected \"de_veubeke\" or \"polar\"", s);
+        o.frame = s == "polar" ? fem::CorotationFrame::Polar : fem::CorotationFrame::DeVeubeke;
+    }
+    if (auto v = r.find("tangent")) {
+        const std::string s = v->string();
+        v->fail_unless(s == "consistent" || s == "fixed_frame",
+                       "unknown value \"{}\"; expected \"consistent\" or \"fixed_frame\"", s);
+        o.tangent = s == "consistent" ? sim::Tangent::Consistent : sim::Tangent::FixedFrame;
+    }
+    if (auto v = r.find("tolerance")) {
+        o.tolerance = v->positive();
+        v->fail_unless(o.tolerance < 1, "expected a relative residual in (0, 1), got {}",
+                       o.tolerance);
+    }
+    if (auto v = r.find("max_iterations"))
+        o.max_iterations = static_cast<int>(v->integer(1, 100'000));
+    if (auto v = r.find("max_bisections")) o.max_bisections = static_cast<int>(v->integer(0, 40));
+    return o;
+}
+
+}  // namespace coarsegrain::scene
