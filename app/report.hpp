@@ -2,12 +2,14 @@
 /// @file The comparison of several coarsening methods on one scene (`coarsegrain demo`,
 /// `coarsegrain coarsen --method a,b,...`): its table and its report (report.md with pictures).
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "coarsegrain/coarsen/runtime.hpp"
+#include "coarsegrain/fem/rs_warp.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
 namespace coarsegrain::app {
@@ -21,10 +23,13 @@ struct FineRun {
     /// The fine solution every method is compared with: linear, or corotated with the scene's
     /// "kinematics": "corotational".
     scene::StaticSolution solution;
-    /// With corotated kinematics, the linear solution too (phase "linear solve"): the
-    /// hierarchy's level diagnostics are those of the linear operator.
+    /// With corotated kinematics or a warp, the linear solution too (phase "linear solve" if it
+    /// took one): the hierarchy's level diagnostics are those of the linear operator.
     std::optional<scene::StaticSolution> linear;
-    Timings timings;  ///< read, assemble, [newton,] factorize, solve, [linear solve,] write
+    /// With "warp": "rs", the post-warp of fine displacements, factorized once (phase "warp").
+    std::shared_ptr<const fem::RsWarp> warp;
+    /// read, assemble, [newton,] factorize, solve, [linear solve,] [warp,] write
+    Timings timings;
     std::vector<Eigen::VectorXd> probes;
 
     /// The solution's seconds: factorizations and solves, and Newton's evaluations.

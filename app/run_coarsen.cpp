@@ -52,6 +52,17 @@ FineRun solve_fine(const scene::Scene& sc, const std::vector<std::string>& metho
     } else {
         f.solution = scene::solve_static(f.model, sc.solver, &f.timings, keep);
     }
+    if (sc.rs_warp) {
+        {
+            const Phase phase("warp", &f.timings);
+            f.warp = std::make_shared<const fem::RsWarp>(f.model.mesh, f.model.bc, sc.solver);
+        }
+        if (sc.kinematics == sim::Kinematics::Linear) {
+            f.linear = f.solution;
+            const Phase phase("warp", &f.timings);
+            f.solution.u = (*f.warp)(f.solution.u);
+        }
+    }
     f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
     return f;
 }
@@ -76,12 +87,14 @@ nlohmann::json fine_json_of(const scene::Scene& sc, const FineRun& f) {
 }
 
 // Solves the coarse model (corotated if the scene asks for it and the model has elements to
-// rotate, else linear) and adds its "newton", "factorize" and "solve" seconds to `timings`. A
+// rotate, else linear, then post-warped if the scene asks for it) and adds its "newton",
+// "factorize", "solve" and "warp" seconds to `timings`. A
 // coarse solve of a few milliseconds is at the mercy of the scheduler (one descheduled OpenMP
 // worker costs more than the whole factorization), so short solves are repeated, up to 5 times
 // and 0.1 s in all, and the fastest run of each phase is reported.
 coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
-                                           const scene::Scene& sc, Timings& timings) {
+                                           const scene::Scene& sc, const FineRun& f,
+                                           Timings& timings) {
     const bool corotated =
         sc.kinematics == sim::Kinematics::Corotational && model.element_model.has_value();
     const auto solve = [&](Timings* t) {
@@ -107,6 +120,10 @@ coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
     }
     for (std::size_t i = 0; i < phases.size(); ++i)
         if (best[i] > 0 || phases[i] != "newton") timings.add(phases[i], best[i]);
+    if (f.warp && !s.newton) {  // a linear solution, post-warped on the fine mesh
+        const Phase phase("warp", &timings);
+        s.u_fine = (*f.warp)(s.u_fine);
+    }
     return s;
 }
 
@@ -166,7 +183,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         coarsen::build_coarse_model(sc, fine, method, f.solution.factorization.get());
     if (write_fine_vtu) write_fine(f, dir);
     Timings tc = coarse.timings;
-    const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc, tc);
+    const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc, f, tc);
     MethodResult r;
     r.method = method;
     r.errors = coarsen::compare(fine, u, uc.u_fine);
@@ -184,7 +201,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         compare_with_fine(coarse, sc, fine, f.linear_solution(), dir, coarse_json, tc);
     r.dofs = coarse.K.rows();
     r.build_seconds = sum(coarse.timings);
-    r.factorize_and_solve = tc["newton"] + tc["factorize"] + tc["solve"];
+    r.factorize_and_solve = tc["newton"] + tc["factorize"] + tc["solve"] + tc["warp"];
     r.speedup = f.factorize_and_solve() / r.factorize_and_solve;
     coarse_json["nodes"] = coarse.nodes;
     coarse_json["elements"] = coarse.elements;
@@ -196,6 +213,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
     coarse_json["kinematics"] =
         sim::kinematics_name(uc.newton ? sim::Kinematics::Corotational : sim::Kinematics::Linear);
     if (uc.newton) coarse_json["newton"] = newton_json(*uc.newton, sc.corotation);
+    coarse_json["warp"] = f.warp && !uc.newton ? "rs" : "none";
     nlohmann::json fine_json = fine_json_of(sc, f);
     r.summary = {
         {"command", "coarsen"},
@@ -213,6 +231,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
          {{"solve", f.timings["solve"] / tc["solve"]}, {"factorize_and_solve", r.speedup}}},
         {"max_displacement", nodal_magnitude(uc.u_fine, dim).maxCoeff()},
         {"kinematics", sim::kinematics_name(sc.kinematics)},
+        {"warp", sc.rs_warp ? "rs" : "none"},
         {"strain_energy", uc.strain_energy},
         {"compliance", coarse.f.dot(uc.u)},
         {"fine_max_displacement", nodal_magnitude(u, dim).maxCoeff()},
@@ -334,6 +353,7 @@ int finish_comparison(const scene::Scene& sc, const std::string& command, const 
         {"solver", solve::backend_name(sc.solver.backend)},
         {"threads", omp_get_max_threads()},
         {"kinematics", sim::kinematics_name(sc.kinematics)},
+        {"warp", sc.rs_warp ? "rs" : "none"},
         {"probes", probes_json(sc, f.probes)},
         {"warnings", f.model.warnings},
         {"max_displacement", nodal_magnitude(f.solution.u, f.model.mesh.dim()).maxCoeff()},

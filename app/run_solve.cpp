@@ -5,7 +5,9 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
+#include "coarsegrain/fem/rs_warp.hpp"
 #include "coarsegrain/io/file_util.hpp"
 #include "output.hpp"
 
@@ -18,8 +20,15 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
     const scene::FineModel model = scene::build_fine_model(sc, &t);
     print_warnings(model.warnings);
     const bool corotated = sc.kinematics == sim::Kinematics::Corotational;
-    const scene::StaticSolution sol = corotated ? scene::solve_corotated(model, sc, &t)
-                                                : scene::solve_static(model, sc.solver, &t);
+    scene::StaticSolution sol = corotated ? scene::solve_corotated(model, sc, &t)
+                                          : scene::solve_static(model, sc.solver, &t);
+    const bool warped = sc.rs_warp && !corotated;
+    std::optional<double> linear_max_u;
+    if (warped) {
+        linear_max_u = nodal_magnitude(sol.u, model.mesh.dim()).maxCoeff();
+        const Phase phase("warp", &t);
+        sol.u = fem::RsWarp(model.mesh, model.bc, sc.solver)(sol.u);
+    }
     const int dim = model.mesh.dim();
     const std::vector<Eigen::VectorXd> probes = scene::probe_displacements(sc, model.mesh, sol.u);
     const double max_u = nodal_magnitude(sol.u, dim).maxCoeff();
@@ -37,6 +46,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
         {"solver", solve::backend_name(sc.solver.backend)},
         {"threads", omp_get_max_threads()},
         {"kinematics", sim::kinematics_name(sc.kinematics)},
+        {"warp", warped ? "rs" : "none"},
         {"probes", probes_json(sc, probes)},
         {"warnings", model.warnings},
         {"max_displacement", max_u},
@@ -45,6 +55,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
         {"peak_memory_mb", peak_rss_mb()},
     };
     if (sol.newton) summary["newton"] = newton_json(*sol.newton, sc.corotation);
+    if (linear_max_u) summary["linear_max_displacement"] = *linear_max_u;
     write_summary(out_dir, summary);
 
     std::printf("coarsegrain solve: %s\n", sc.source.c_str());

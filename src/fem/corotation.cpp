@@ -84,13 +84,23 @@ using Frame = Eigen::Matrix<double, S::dim, S::dim>;
 template <class S>
 using ElementVector = Eigen::Matrix<double, S::npe * S::dim, 1>;
 
-/// Σ_a (x_a - b)(X_a - b_0)ᵀ of corners x and rest corners X (npe x dim each).
+/// An element's corners relative to their barycentre: at rest, X_a - b_0, and displaced,
+/// x_a - b = (X_a - b_0) + (u_a - ū). The displaced ones are never formed from the absolute
+/// positions X_a + u_a: rounding those (of the object's size) would put noise of ε |X| into û,
+/// which is small (of the strain's size), where this leaves ε |u - ū|.
 template <class S>
-Frame<S> frame_moment(const kernels::Coords<S>& X, const kernels::Coords<S>& x) {
-    const kernels::Coords<S> Xc = X.rowwise() - X.colwise().mean();
-    const kernels::Coords<S> xc = x.rowwise() - x.colwise().mean();
-    return xc.transpose() * Xc;
-}
+struct CentredCorners {
+    kernels::Coords<S> rest, current;
+
+    CentredCorners(const mesh::Mesh& mesh, Index e, const Vector& u) {
+        const kernels::Coords<S> X = kernels::element_coords<S>(mesh, e);
+        kernels::Coords<S> U;
+        for (int a = 0; a < S::npe; ++a)
+            U.row(a) = u.template segment<S::dim>(S::dim * mesh.elements(e, a)).transpose();
+        rest = X.rowwise() - X.colwise().mean();
+        current = rest + (U.rowwise() - U.colwise().mean());
+    }
+};
 
 }  // namespace
 
@@ -104,7 +114,6 @@ struct CorotatedModel::Impl {
     detail::NodeElements incidence;
     detail::NodeGraph graph;
     SparseMatrix pattern;  ///< the tangent's pattern (values unset)
-    double force_round_off = 0;
 
     const Matrix& Ke(Index e) const {
         return stiffness[stiffness_index[static_cast<std::size_t>(e)]];
@@ -138,30 +147,28 @@ CorotatedModel::State CorotatedModel::Impl::evaluate(const Vector& u) const {
     State state;
     state.frames.resize(static_cast<std::size_t>(ne * dim * dim));
     std::vector<ElementVector<S>> element_force(static_cast<std::size_t>(ne));
-    Vector energy(ne);
+    Vector energy(ne), round_off(ne);
     detail::parallel_for(ne, [&](Index e) {
-        const kernels::Coords<S> X = kernels::element_coords<S>(mesh, e);
-        kernels::Coords<S> x = X;
-        for (int a = 0; a < npe; ++a)
-            x.row(a) += u.template segment<dim>(dim * mesh.elements(e, a)).transpose();
-        Frame<S> A = frame_moment<S>(X, x);
+        const CentredCorners<S> c(mesh, e, u);
+        Frame<S> A = c.current.transpose() * c.rest;  // Σ_a (x_a - b)(X_a - b_0)ᵀ
         if (frame == CorotationFrame::Polar)
             A *= Eigen::Map<const Frame<S>>(inverse_moment[static_cast<std::size_t>(e)].data());
         const Frame<S> R = rotation_factor(A);
         Eigen::Map<Frame<S>>(state.frames.data() + e * dim * dim) = R;
         // û row by row: Rᵀ(x_a - b) - (X_a - b_0)
-        const kernels::Coords<S> rows =
-            (x.rowwise() - x.colwise().mean()) * R - (X.rowwise() - X.colwise().mean());
+        const kernels::Coords<S> rows = c.current * R - c.rest;
         ElementVector<S> u_hat;
         for (int a = 0; a < npe; ++a) u_hat.template segment<dim>(dim * a) = rows.row(a);
-        const ElementVector<S> Ku =
-            Eigen::Map<const Eigen::Matrix<double, npe * dim, npe * dim>>(Ke(e).data()) * u_hat;
+        const Eigen::Map<const Eigen::Matrix<double, npe * dim, npe * dim>> K(Ke(e).data());
+        const ElementVector<S> Ku = K * u_hat;
         energy[e] = 0.5 * u_hat.dot(Ku);
+        round_off[e] = K.norm() * c.current.norm();
         ElementVector<S>& f = element_force[static_cast<std::size_t>(e)];
         for (int a = 0; a < npe; ++a)
             f.template segment<dim>(dim * a) = R * Ku.template segment<dim>(dim * a);
     });
     state.energy = energy.sum();
+    state.round_off = std::numeric_limits<double>::epsilon() * round_off.norm();
     Vector force(dim * nv);
 #pragma omp parallel for schedule(static) if (nv >= detail::kMinParallel)
     for (Index v = 0; v < nv; ++v) {
@@ -185,12 +192,9 @@ void CorotatedModel::Impl::jacobian(const State& state, SparseMatrix& J) const {
     const Vector& u = state.displacement;
     std::vector<ElementMatrix> element_jacobian(static_cast<std::size_t>(ne));
     detail::parallel_for(ne, [&](Index e) {
-        const kernels::Coords<S> X = kernels::element_coords<S>(mesh, e);
-        kernels::Coords<S> x = X;
-        for (int a = 0; a < npe; ++a)
-            x.row(a) += u.template segment<dim>(dim * mesh.elements(e, a)).transpose();
-        const kernels::Coords<S> Xc = X.rowwise() - X.colwise().mean();
-        const kernels::Coords<S> xc = x.rowwise() - x.colwise().mean();
+        const CentredCorners<S> corners(mesh, e, u);
+        const kernels::Coords<S>& Xc = corners.rest;
+        const kernels::Coords<S>& xc = corners.current;
         // c_a: the weights of dx_a in the frame's moment, dM = Σ_a dx_a c_aᵀ.
         kernels::Coords<S> c = Xc;
         if (frame == CorotationFrame::Polar)
@@ -314,11 +318,6 @@ CorotatedModel::CorotatedModel(const mesh::Mesh& mesh, const material::ElementMa
             m.inverse_moment[static_cast<std::size_t>(e)] = (X0.transpose() * X0).inverse();
         });
     }
-    Vector scale(ne);
-    detail::parallel_for(ne, [&](Index e) {
-        scale[e] = m.Ke(e).norm() * centred(mesh.element_positions(e)).norm();
-    });
-    m.force_round_off = std::numeric_limits<double>::epsilon() * scale.norm();
     m.incidence = detail::node_elements(mesh);
     m.graph = detail::node_graph(mesh, m.incidence);
     detail::block_pattern(m.graph, dim, true, true, m.pattern);
@@ -333,8 +332,6 @@ Index CorotatedModel::num_dofs() const {
 }
 
 CorotationFrame CorotatedModel::frame() const { return m_impl->frame; }
-
-double CorotatedModel::force_round_off() const { return m_impl->force_round_off; }
 
 CorotatedModel::State CorotatedModel::evaluate(const Vector& w) const {
     CG_VERIFY(w.size() == num_dofs(), "CorotatedModel: displacement of size {} for {} DOFs",

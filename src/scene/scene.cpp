@@ -287,7 +287,7 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     root.require_object();
     root.allow_only({"description", "dimension", "mesh", "materials", "material_field", "plane",
                      "dirichlet", "loads", "probes", "fem", "solver", "coarse", "dynamics",
-                     "kinematics", "corotation"});
+                     "kinematics", "corotation", "warp"});
     // Everything that needs no mesh first, so that a bad option fails before a mesh is read.
     std::optional<int> dimension;
     if (auto d = root.find("dimension")) dimension = static_cast<int>(d->integer(2, 3));
@@ -326,6 +326,12 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
         k->fail_unless(v == "linear" || v == "corotational",
                        "unknown value \"{}\"; expected \"linear\" or \"corotational\"", v);
         s.kinematics = v == "linear" ? sim::Kinematics::Linear : sim::Kinematics::Corotational;
+    }
+    if (auto w = root.find("warp")) {
+        const std::string v = w->string();
+        w->fail_unless(v == "none" || v == "rs",
+                       "unknown value \"{}\"; expected \"none\" or \"rs\"", v);
+        s.rs_warp = v == "rs";
     }
     if (auto c = root.find("corotation")) {
         c->fail_unless(s.kinematics == sim::Kinematics::Corotational,

@@ -14,7 +14,7 @@ namespace {
 constexpr double kMinStep = 1.0 / 64;
 
 /// Residuals below this many times the force's round-off count as converged: exact Newton
-/// iterations stall at 1.7-2.0 times it (fem::CorotatedModel::force_round_off).
+/// iterations stall at 0.4 to 2.1 times it (fem::CorotatedModel::State::round_off).
 constexpr double kRoundOffFactor = 4;
 
 /// v restricted to the free DOFs.
@@ -41,7 +41,7 @@ class Increment {
         fem::CorotatedModel::State state = evaluate(u);
         Vector r = residual(state, load_factor);
         for (int it = 0; it < m_options.max_iterations; ++it) {
-            if (converged(r)) return true;
+            if (converged(r, state)) return true;
             Vector d;
             try {
                 d = newton_step(state, r);
@@ -81,13 +81,13 @@ class Increment {
             }
             m_report.history.push_back({load_factor, r.norm() / m_reference, step});
         }
-        return converged(r);
+        return converged(r, state);
     }
 
-    /// Whether the residual (free DOFs) meets the tolerance or the round-off floor.
-    bool converged(const Vector& r) const {
-        return r.norm() <= std::max(m_options.tolerance * m_reference,
-                                    kRoundOffFactor * m_model.force_round_off());
+    /// Whether the residual (free DOFs) at `state` meets the tolerance or the round-off floor.
+    bool converged(const Vector& r, const fem::CorotatedModel::State& state) const {
+        return r.norm() <=
+               std::max(m_options.tolerance * m_reference, kRoundOffFactor * state.round_off);
     }
 
     /// The Newton step T^{-1} r with the tangent at `state` on the free DOFs.
@@ -202,7 +202,7 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
     }
     const fem::CorotatedModel::State state = increment.evaluate(u);
     sol.report.residual = increment.residual(state, 1).norm() / reference;
-    sol.report.round_off = kRoundOffFactor * model.force_round_off() / reference;
+    sol.report.round_off = kRoundOffFactor * state.round_off / reference;
     sol.energy = state.energy;
     sol.u = std::move(u);
     return sol;

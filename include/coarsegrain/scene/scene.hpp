@@ -84,6 +84,11 @@ struct Scene {
     sim::Kinematics kinematics = sim::Kinematics::Linear;
     /// "corotation": the frame and the Newton solve of corotated kinematics.
     sim::CorotationOptions corotation;
+    /// "warp": "rs" (default "none"): every linear solution carried to the fine mesh (the fine
+    /// model's with linear kinematics, the hierarchy's, and the element models' with linear
+    /// kinematics) is post-warped by rotation-strain coordinates (Chen et al. 2019, Sec. 4.3,
+    /// Eq. 13; fem::RsWarp); corotated solutions are not.
+    bool rs_warp = false;
     /// Folder that relative file names in the scene are resolved against.
     std::string base_dir;
 };

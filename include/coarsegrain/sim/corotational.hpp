@@ -41,7 +41,7 @@ struct CorotationOptions {
     Tangent tangent = Tangent::Consistent;
     /// Converged when the residual on the free DOFs, |f - f_int(u)|, is at most tolerance times
     /// its value at the start of the solve (u = 0 with the prescribed values, the full load), or
-    /// at most 4 times the force's round-off (fem::CorotatedModel::force_round_off), below
+    /// at most 4 times the force's round-off (fem::CorotatedModel::State::round_off), below
     /// which no iteration can reduce it (NewtonReport::round_off says where that is).
     double tolerance = 1e-8;
     /// Newton iterations per load increment before the increment is halved.
@@ -79,19 +79,19 @@ struct CorotatedSolution {
 /// Solves the corotated equilibrium f_int(u) = f on the DOFs that bc leaves free, with u = bc's
 /// values on its DOFs. The load and the prescribed values are applied in increments λ f, λ u_D:
 /// first the whole (λ = 1); an increment whose Newton iteration does not converge within
-/// max_iterations (or whose line search stalls, or whose tangent is not positive definite) is
-/// halved, and the next one is doubled again after a success, up to the rest of the load.
-/// Each iteration factorizes the tangent (options.tangent) on the free DOFs (one symbolic
-/// analysis for the solve) and takes the Newton step d = T^{-1} r, scaled by a backtracking line
-/// search on the
-/// residual norm (|r(u + s d)| <= (1 - s/4) |r(u)|, halving s down to 1/64); the internal
-/// force is not the exact gradient of W for a de Veubeke frame, so the energy is no merit
-/// function. Phases "newton" (evaluations) and "factorize", "solve" go to `timings`.
+/// max_iterations (or whose line search stalls, or whose tangent is singular or, for the fixed
+/// frame, not positive definite) is halved, and the next one is doubled again after a success,
+/// up to the rest of the load. Each iteration factorizes the tangent (options.tangent) on the
+/// free DOFs (one symbolic analysis for the solve) and takes the Newton step d = T^{-1} r,
+/// scaled by a backtracking line search (halving s down to 1/64) that accepts a step lowering
+/// the potential Π = W - λ fᵀu by 1e-4 s rᵀd (the force is Π's gradient up to O(|û|²)) or the
+/// residual norm to (1 - s/4) |r|: far from equilibrium the residual of a stiff part's
+/// linearized rotation dwarfs the load while its energy stays small, near equilibrium the
+/// residual decides. Phases "newton" (evaluations) and "factorize", "solve" go to `timings`.
 /// @throws Error if sizes disagree or the options are out of range; NotPositiveDefinite if the
 ///         first tangent (for zero prescribed values: the stiffness) is singular or not
-///         definite (the conditions do not hold the model); NotConverged
-///         naming the load factor reached, the iterations and the residual if the smallest
-///         increment fails
+///         definite (the conditions do not hold the model); NotConverged naming the load
+///         factor reached, the iterations and the residual if the smallest increment fails
 CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const Vector& f,
                                          const fem::Dirichlet& bc, const CorotationOptions& options,
                                          const solve::SolverOptions& solver,
