@@ -36,7 +36,8 @@ struct FineRun {
     double factorize_and_solve() const {
         return timings["newton"] + timings["factorize"] + timings["solve"];
     }
-    /// The solution the methods' fine comparisons (CoarseModel::compare_with_fine) use.
+    /// The linear solution: the one the methods' fine comparisons (CoarseModel::compare_with_fine)
+    /// use, with the factorization of K_ff if kept (coarsen::uses_fine_factorization).
     const scene::StaticSolution& linear_solution() const { return linear ? *linear : solution; }
 };
 

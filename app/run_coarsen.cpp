@@ -88,10 +88,10 @@ nlohmann::json fine_json_of(const scene::Scene& sc, const FineRun& f) {
 
 // Solves the coarse model (corotated if the scene asks for it and the model has elements to
 // rotate, else linear, then post-warped if the scene asks for it) and adds its "newton",
-// "factorize", "solve" and "warp" seconds to `timings`. A
-// coarse solve of a few milliseconds is at the mercy of the scheduler (one descheduled OpenMP
-// worker costs more than the whole factorization), so short solves are repeated, up to 5 times
-// and 0.1 s in all, and the fastest run of each phase is reported.
+// "factorize", "solve" and "warp" seconds to `timings`. A coarse solve of a few milliseconds is
+// at the mercy of the scheduler (one descheduled OpenMP worker costs more than the whole
+// factorization), so short solves are repeated, up to 5 times and 0.1 s in all, and the fastest
+// run of each phase is reported.
 coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
                                            const scene::Scene& sc, const FineRun& f,
                                            Timings& timings) {
@@ -180,7 +180,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
     const Vector& u = f.solution.u;
     const int dim = fine.mesh.dim();
     coarsen::CoarseModel coarse =
-        coarsen::build_coarse_model(sc, fine, method, f.solution.factorization.get());
+        coarsen::build_coarse_model(sc, fine, method, f.linear_solution().factorization.get());
     if (write_fine_vtu) write_fine(f, dir);
     Timings tc = coarse.timings;
     const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc, f, tc);

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 
+#include "bench_times.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
 namespace cg = coarsegrain;
@@ -45,24 +46,16 @@ BENCHMARK(BM_CantileverLDLT)->Unit(benchmark::kMillisecond)->Iterations(2)->UseR
 
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
-    // Collect per-benchmark real times to print the ratio measured in this run.
-    class Reporter : public benchmark::ConsoleReporter {
-    public:
-        void ReportRuns(const std::vector<Run>& runs) override {
-            for (const Run& r : runs) times[r.benchmark_name()] = r.GetAdjustedRealTime();
-            ConsoleReporter::ReportRuns(runs);
-        }
-        std::map<std::string, double> times;
-    } reporter;
-    benchmark::RunSpecifiedBenchmarks(&reporter);
+    // Per-benchmark real times, to print the ratio measured in this run.
     double chol = 0, ldlt = 0;
-    for (const auto& [name, time] : reporter.times) {
+    for (const auto& [name, time] : coarsegrain::bench::run_and_collect_times()) {
         if (name.find("Cholmod") != std::string::npos) chol = time;
         if (name.find("LDLT") != std::string::npos) ldlt = time;
     }
     if (chol > 0 && ldlt > 0)
-        std::printf("end to end: CHOLMOD %.0f ms, SimplicialLDLT %.0f ms, ratio LDLT/CHOLMOD %.2f\n",
-                    chol, ldlt, ldlt / chol);
+        std::printf(
+            "end to end: CHOLMOD %.0f ms, SimplicialLDLT %.0f ms, ratio LDLT/CHOLMOD %.2f\n", chol,
+            ldlt, ldlt / chol);
     rusage r{};
     getrusage(RUSAGE_SELF, &r);
     std::printf("peak resident memory: %.0f MB\n", static_cast<double>(r.ru_maxrss) / 1024.0);

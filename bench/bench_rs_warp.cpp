@@ -12,6 +12,7 @@
 #include <map>
 #include <string>
 
+#include "bench_times.hpp"
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/fem/rs_warp.hpp"
@@ -123,18 +124,10 @@ BENCHMARK(BM_ElasticityFactorizeSolve)->Unit(benchmark::kMillisecond)->UseRealTi
 
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
-    // Collect the real times of this run to print the ratios to the elasticity solve.
-    class Reporter : public benchmark::ConsoleReporter {
-      public:
-        void ReportRuns(const std::vector<Run>& runs) override {
-            for (const Run& r : runs) times[r.benchmark_name()] = r.GetAdjustedRealTime();
-            ConsoleReporter::ReportRuns(runs);
-        }
-        std::map<std::string, double> times;
-    } reporter;
-    benchmark::RunSpecifiedBenchmarks(&reporter);
+    // The real times of this run, to print the ratios to the elasticity solve.
+    const std::map<std::string, double> times = coarsegrain::bench::run_and_collect_times();
     const auto time = [&](const std::string& prefix) {
-        for (const auto& entry : reporter.times)
+        for (const auto& entry : times)
             if (entry.first.rfind(prefix, 0) == 0) return entry.second;
         return 0.0;
     };

@@ -25,16 +25,6 @@ bool congruent_grid(const mesh::Mesh& mesh) {
     return mesh.grid && (mesh.type == ElementType::Quad4 || mesh.type == ElementType::Hex8);
 }
 
-/// Corner positions of one grid cell (the element of every cell of a Quad4/Hex8 grid).
-template <class S>
-kernels::Coords<S> grid_cell(const mesh::GridInfo& grid) {
-    const Eigen::Vector3d h = grid.spacing();
-    kernels::Coords<S> X;
-    for (int a = 0; a < S::npe; ++a)
-        for (int d = 0; d < S::dim; ++d) X(a, d) = S::kCorners[a][d] * h[d];
-    return X;
-}
-
 /// Adds the columns of node b (local index) of element matrix K of element e.
 template <class S, bool Full, class ElementMatrixType>
 void add_columns(const mesh::Mesh& mesh, Skeleton& s, Index e, const ElementMatrixType& K, int b) {
@@ -170,7 +160,7 @@ SparseMatrix stiffness_matrix(const mesh::Mesh& mesh, const material::ElementMat
         Skeleton s = detail::skeleton(mesh, true, !cached, K);
         if constexpr (!S::simplex) {
             if (cached) {
-                const kernels::Coords<S> X = grid_cell<S>(*mesh.grid);
+                const kernels::Coords<S> X = kernels::grid_cell<S>(*mesh.grid);
                 std::vector<kernels::ElementMatrix<S>> cache;
                 for (const material::Material& m : mats.table)
                     cache.push_back(element_matrix(X, m.C.topLeftCorner<n, n>()));
@@ -203,7 +193,8 @@ SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterial
             std::vector<Weights> w(static_cast<std::size_t>(mesh.num_elements()));
             std::optional<Weights> cell;
             if constexpr (!S::simplex)
-                if (congruent_grid(mesh)) cell = kernels::load_weights<S>(grid_cell<S>(*mesh.grid));
+                if (congruent_grid(mesh))
+                    cell = kernels::load_weights<S>(kernels::grid_cell<S>(*mesh.grid));
             detail::parallel_for(mesh.num_elements(), [&](Index e) {
                 w[e] = mats.of(e).density * (cell ? *cell : detail::for_element(e, [&] {
                            return kernels::load_weights<S>(kernels::element_coords<S>(mesh, e));
@@ -232,7 +223,7 @@ SparseMatrix mass_matrix(const mesh::Mesh& mesh, const material::ElementMaterial
         Skeleton s = detail::skeleton(mesh, false, !cached, M);
         if constexpr (!S::simplex) {
             if (cached) {
-                const Scalar cell = kernels::scalar_mass<S>(grid_cell<S>(*mesh.grid), 1.0);
+                const Scalar cell = kernels::scalar_mass<S>(kernels::grid_cell<S>(*mesh.grid), 1.0);
                 std::vector<Scalar> cache;
                 for (const material::Material& m : mats.table) cache.push_back(m.density * cell);
                 detail::gather<S, false>(mesh, s, [&](Index e, int b) {

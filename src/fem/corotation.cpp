@@ -227,13 +227,13 @@ void CorotatedModel::Impl::jacobian(const State& state, SparseMatrix& J) const {
         bool differentiable = true;
         if constexpr (dim == 2) {
             const double trace = Sm.trace();
-            differentiable = trace > 1e-8 * Xc.squaredNorm();
+            differentiable = trace > 1e-8 * Sm.norm();
             for (int a = 0; a < npe; ++a) G.template block<1, 2>(0, 2 * a) << -c(a, 1), c(a, 0);
             G /= trace;
         } else {
             const Eigen::Matrix3d H = Sm.trace() * Eigen::Matrix3d::Identity() - Sm;
             const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(H);
-            differentiable = eig.eigenvalues().minCoeff() > 1e-8 * Xc.squaredNorm();
+            differentiable = eig.eigenvalues().minCoeff() > 1e-8 * Sm.norm();
             const Eigen::Matrix3d H_inv = H.inverse();
             for (int a = 0; a < npe; ++a) {
                 Eigen::Matrix3d cross;

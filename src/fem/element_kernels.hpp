@@ -327,8 +327,7 @@ ElementMatrix<S> incompatible_stiffness(const Coords<S>& X, const Tensor<S>& C) 
         const double scale = Mapping == ModeMapping::Taylor ? j0 / j : 1.0;
         for (int k = 0; k < D; ++k)
             G.row(npe + k) = (scale * 4.0 * (1.0 - 2.0 * xi[k])) * J0inv.row(k);
-        const Eigen::Matrix<double, mandel_size(D), D * rows> B =
-            strain_displacement_of<D, rows>(G);
+        const Eigen::Matrix<double, mandel_size(D), D* rows> B = strain_displacement_of<D, rows>(G);
         K.noalias() += (rule.weights[q] * j) * (B.transpose() * C * B);
     }
     const Eigen::LLT<Eigen::Matrix<double, na, na>> Kaa(K.template bottomRightCorner<na, na>());
@@ -388,6 +387,17 @@ template <class S>
 Coords<S> element_coords(const mesh::Mesh& mesh, Index e) {
     Coords<S> X;
     for (int a = 0; a < S::npe; ++a) X.row(a) = mesh.rest_positions.row(mesh.elements(e, a));
+    return X;
+}
+
+/// Corner positions of one cell of a regular grid (Q1 shapes: every cell of a Quad4 / Hex8 grid
+/// is this one, translated).
+template <class S>
+Coords<S> grid_cell(const mesh::GridInfo& grid) {
+    const Eigen::Vector3d h = grid.spacing();
+    Coords<S> X;
+    for (int a = 0; a < S::npe; ++a)
+        for (int d = 0; d < S::dim; ++d) X(a, d) = S::kCorners[a][d] * h[d];
     return X;
 }
 

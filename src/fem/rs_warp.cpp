@@ -53,16 +53,6 @@ kernels::Rule<S::dim, kPoints<S>> warp_rule() {
     }
 }
 
-/// Corner positions of one cell of a regular grid (every cell of a Quad4 / Hex8 grid).
-template <class S>
-kernels::Coords<S> warp_grid_cell(const mesh::GridInfo& grid) {
-    const Eigen::Vector3d h = grid.spacing();
-    kernels::Coords<S> X;
-    for (int a = 0; a < S::npe; ++a)
-        for (int d = 0; d < S::dim; ++d) X(a, d) = S::kCorners[a][d] * h[d];
-    return X;
-}
-
 const char* component_name(int i) { return i == 0 ? "x" : i == 1 ? "y" : "z"; }
 
 /// Connected parts of the mesh (nodes sharing an element): part[v] = smallest node of v's part.
@@ -141,7 +131,7 @@ void quadrature_data(const mesh::Mesh& mesh, WarpData& w) {
     w.weights.resize(static_cast<std::size_t>(slots) * nq);
     if constexpr (!S::simplex) {
         if (w.shared) {
-            fill(warp_grid_cell<S>(*mesh.grid), 0);
+            fill(kernels::grid_cell<S>(*mesh.grid), 0);
             return;
         }
     }
