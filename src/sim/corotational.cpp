@@ -13,6 +13,9 @@ namespace {
 /// The smallest line-search step before an iteration counts as stalled.
 constexpr double kMinStep = 1.0 / 64;
 
+/// Full Newton steps in a row that lower neither merit before the watchdog stops them.
+constexpr int kWatchdog = 4;
+
 /// Residuals below this many times the force's round-off count as converged: exact Newton
 /// iterations stall at 0.4 to 2.1 times it (fem::CorotatedModel::State::round_off).
 constexpr double kRoundOffFactor = 4;
@@ -37,10 +40,30 @@ class Increment {
           m_report(report),
           m_timings(timings) {}
 
+    /// Newton's method for the increment, from u (updated in place): first with full steps,
+    /// watched (full_steps), then, if those stop making progress, again from u with the line
+    /// search. Returns whether it converged within max_iterations in all.
     bool run(Vector& u, double load_factor) {
+        const Vector start = u;
+        int budget = m_options.max_iterations;
+        if (iterate(u, load_factor, false, budget)) return true;
+        u = start;
+        return budget > 0 && iterate(u, load_factor, true, budget);
+    }
+
+    /// Newton iterations from u, at most `budget` (decremented), with the line search or with
+    /// full steps under a watchdog: full steps may raise both merits for a while (the first
+    /// step from rest, the linear solution, stretches a stiff part's linearized rotation: on
+    /// the effective tensors' accordion it raised the residual 12,000 times and the potential
+    /// from 0 to 30, and the next three steps converged), but if kWatchdog steps in a row
+    /// lower neither the residual nor the potential below their values before them, the
+    /// iteration stops. Returns whether it converged.
+    bool iterate(Vector& u, double load_factor, bool line_search, int& budget) {
         fem::CorotatedModel::State state = evaluate(u);
         Vector r = residual(state, load_factor);
-        for (int it = 0; it < m_options.max_iterations; ++it) {
+        double watched_residual = r.norm(), watched_potential = potential(state, u, load_factor);
+        int unwatched = 0;
+        for (; budget > 0; --budget) {
             if (converged(r, state)) return true;
             Vector d;
             try {
@@ -55,33 +78,60 @@ class Increment {
                 return false;
             }
             ++m_report.iterations;
-            // Merit: the potential Π = W - λ fᵀu, whose gradient the force is up to O(|û|²),
-            // or the residual norm. Far from equilibrium the residual of a stiff part's
-            // linearized rotation (a spurious stretch) dwarfs the load while its energy stays
-            // small, so Π accepts the steps the residual would cut; near equilibrium, where Π's
-            // gradient and the force part by their O(|û|²), the residual takes over.
-            const double potential = state.energy - load_factor * m_load.dot(u);
-            const double slope = r.dot(d);  // -dΠ/ds at s = 0 (to O(|û|²))
-            double step = 1;
-            for (;; step /= 2) {
-                if (step < kMinStep) return false;
-                Vector trial = u;
-                trial(m_free) += step * d;
-                fem::CorotatedModel::State trial_state = evaluate(trial);
-                Vector trial_r = residual(trial_state, load_factor);
-                const double trial_potential = trial_state.energy - load_factor * m_load.dot(trial);
-                const bool descent =
-                    slope > 0 && trial_potential <= potential - 1e-4 * step * slope;
-                if (descent || trial_r.norm() <= (1 - step / 4) * r.norm()) {
-                    u = std::move(trial);
-                    state = std::move(trial_state);
-                    r = std::move(trial_r);
-                    break;
+            const double step = line_search ? search(u, state, r, d, load_factor) : 1.0;
+            if (step == 0) return false;
+            if (!line_search) {
+                u(m_free) += d;
+                state = evaluate(u);
+                r = residual(state, load_factor);
+                if (!r.allFinite()) return false;
+                const double p = potential(state, u, load_factor);
+                if (r.norm() < watched_residual || p < watched_potential) {
+                    watched_residual = std::min(watched_residual, r.norm());
+                    watched_potential = std::min(watched_potential, p);
+                    unwatched = 0;
+                } else if (++unwatched == kWatchdog) {
+                    --budget;
+                    return false;
                 }
             }
             m_report.history.push_back({load_factor, r.norm() / m_reference, step});
         }
         return converged(r, state);
+    }
+
+    /// Π = W - λ fᵀu.
+    double potential(const fem::CorotatedModel::State& state, const Vector& u,
+                     double load_factor) const {
+        return state.energy - load_factor * m_load.dot(u);
+    }
+
+    /// The backtracking line search along d from u (state, residual r): updates them to the
+    /// accepted step and returns its length, or 0 if it fell below kMinStep. Merit: the
+    /// potential Π, whose gradient the force is up to O(|û|²), or the residual norm. Far from
+    /// equilibrium the residual of a stiff part's linearized rotation (a spurious stretch)
+    /// dwarfs the load while its energy stays small, so Π accepts the steps the residual would
+    /// cut; near equilibrium, where Π's gradient and the force part by their O(|û|²), the
+    /// residual takes over.
+    double search(Vector& u, fem::CorotatedModel::State& state, Vector& r, const Vector& d,
+                  double load_factor) const {
+        const double p = potential(state, u, load_factor);
+        const double slope = r.dot(d);  // -dΠ/ds at s = 0 (to O(|û|²))
+        for (double step = 1; step >= kMinStep; step /= 2) {
+            Vector trial = u;
+            trial(m_free) += step * d;
+            fem::CorotatedModel::State trial_state = evaluate(trial);
+            Vector trial_r = residual(trial_state, load_factor);
+            const bool descent =
+                slope > 0 && potential(trial_state, trial, load_factor) <= p - 1e-4 * step * slope;
+            if (descent || trial_r.norm() <= (1 - step / 4) * r.norm()) {
+                u = std::move(trial);
+                state = std::move(trial_state);
+                r = std::move(trial_r);
+                return step;
+            }
+        }
+        return 0;
     }
 
     /// Whether the residual (free DOFs) at `state` meets the tolerance or the round-off floor.

@@ -44,8 +44,8 @@ TEST_P(CorotatedStaticTest, ConvergesToTheStatedResidual) {
     EXPECT_NEAR(sol.report.residual, r / r0, 1e-12);
     EXPECT_LT(sol.report.round_off, o.tolerance);  // the tolerance decided, not round-off
     // Newton's method with the consistent Jacobian: quadratic convergence, a handful of
-    // iterations per increment (measured: 14 in one increment).
-    EXPECT_LE(sol.report.iterations, 25);
+    // iterations per increment (measured: 6 in one increment).
+    EXPECT_LE(sol.report.iterations, 12);
     for (const Index d : m.bc.dofs) EXPECT_EQ(sol.u[d], 0.0);
     // A large deflection: the linear model's differs by more than 5%.
     const Vector linear = fem::solve_static(m.K, m.f, m.bc, {});
@@ -75,8 +75,10 @@ TEST_P(CorotatedStaticTest, PrescribedRigidRotationTurnsTheBodyRigidly) {
     o.tolerance = 1e-10;
     const sim::CorotatedSolution sol =
         sim::solve_corotated_static(model, Vector::Zero(m.mesh.num_dofs()), bc, o, {});
-    // The residual bound 1e-10 of the clamp's initial force, through K^-1 of the soft layers.
-    EXPECT_LE((sol.u - rigid).norm(), 1e-7 * rigid.norm());
+    // Newton stops at the force's round-off floor (4 ε |K||x - b|, the stiff layers' K), which
+    // the soft layers' compliance (1000 times theirs) turns into a displacement error: measured
+    // 2.0e-6 of the rotation's displacement.
+    EXPECT_LE((sol.u - rigid).norm(), 1e-5 * rigid.norm());
     EXPECT_LE(sol.energy, 1e-12 * 0.5 * rigid.dot(m.K * rigid));
     // Linear elasticity answers the same clamp with a stretched, non-rigid body.
     const Vector linear = fem::solve_static(m.K, Vector::Zero(m.mesh.num_dofs()), bc, {});
