@@ -26,7 +26,8 @@ struct FineRun {
     /// With corotated kinematics or a warp, the linear solution too (phase "linear solve" if it
     /// took one): the hierarchy's level diagnostics are those of the linear operator.
     std::optional<scene::StaticSolution> linear;
-    /// With "warp": "rs", the post-warp of fine displacements, factorized once (phase "warp").
+    /// With "warp": "rs", the post-warp of fine displacements, factorized once, when a linear
+    /// solution first needs it (phase "warp").
     std::shared_ptr<const fem::RsWarp> warp;
     /// read, assemble, [newton,] factorize, solve, [linear solve,] [warp,] write
     Timings timings;

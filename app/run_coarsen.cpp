@@ -36,6 +36,16 @@ nlohmann::json errors_json(const coarsen::Errors& e) {
             {"stress_rel", e.stress_rel}};
 }
 
+// The run's RS post-warp of fine displacements, factorized on first use (phase "warp": only a
+// run with a linear solution to warp pays for it).
+const fem::RsWarp& rs_warp(const scene::Scene& sc, FineRun& f) {
+    if (!f.warp) {
+        const Phase phase("warp", &f.timings);
+        f.warp = std::make_shared<const fem::RsWarp>(f.model.mesh, f.model.bc, sc.solver);
+    }
+    return *f.warp;
+}
+
 // The fine model and its solution; the solution keeps the factorization if one of `methods`
 // uses it.
 FineRun solve_fine(const scene::Scene& sc, const std::vector<std::string>& methods,
@@ -52,16 +62,11 @@ FineRun solve_fine(const scene::Scene& sc, const std::vector<std::string>& metho
     } else {
         f.solution = scene::solve_static(f.model, sc.solver, &f.timings, keep);
     }
-    if (sc.rs_warp) {
-        {
-            const Phase phase("warp", &f.timings);
-            f.warp = std::make_shared<const fem::RsWarp>(f.model.mesh, f.model.bc, sc.solver);
-        }
-        if (sc.kinematics == sim::Kinematics::Linear) {
-            f.linear = f.solution;
-            const Phase phase("warp", &f.timings);
-            f.solution.u = (*f.warp)(f.solution.u);
-        }
+    if (sc.rs_warp && sc.kinematics == sim::Kinematics::Linear) {
+        f.linear = f.solution;
+        const fem::RsWarp& warp = rs_warp(sc, f);
+        const Phase phase("warp", &f.timings);
+        f.solution.u = warp(f.solution.u);
     }
     f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
     return f;
@@ -93,8 +98,7 @@ nlohmann::json fine_json_of(const scene::Scene& sc, const FineRun& f) {
 // factorization), so short solves are repeated, up to 5 times and 0.1 s in all, and the fastest
 // run of each phase is reported.
 coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
-                                           const scene::Scene& sc, const FineRun& f,
-                                           Timings& timings) {
+                                           const scene::Scene& sc, FineRun& f, Timings& timings) {
     const bool corotated =
         sc.kinematics == sim::Kinematics::Corotational && model.element_model.has_value();
     const auto solve = [&](Timings* t) {
@@ -120,9 +124,10 @@ coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
     }
     for (std::size_t i = 0; i < phases.size(); ++i)
         if (best[i] > 0 || phases[i] != "newton") timings.add(phases[i], best[i]);
-    if (f.warp && !s.newton) {  // a linear solution, post-warped on the fine mesh
+    if (sc.rs_warp && !s.newton) {  // a linear solution, post-warped on the fine mesh
+        const fem::RsWarp& warp = rs_warp(sc, f);
         const Phase phase("warp", &timings);
-        s.u_fine = (*f.warp)(s.u_fine);
+        s.u_fine = warp(s.u_fine);
     }
     return s;
 }
@@ -213,7 +218,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
     coarse_json["kinematics"] =
         sim::kinematics_name(uc.newton ? sim::Kinematics::Corotational : sim::Kinematics::Linear);
     if (uc.newton) coarse_json["newton"] = newton_json(*uc.newton, sc.corotation);
-    coarse_json["warp"] = f.warp && !uc.newton ? "rs" : "none";
+    coarse_json["warp"] = sc.rs_warp && !uc.newton ? "rs" : "none";
     nlohmann::json fine_json = fine_json_of(sc, f);
     r.summary = {
         {"command", "coarsen"},

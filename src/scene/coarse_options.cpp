@@ -1,10 +1,8 @@
 // The "coarse" block of a scene: every coarsening method's options, parsed and validated in one
 // place (scene.hpp, CoarseOptions).
-#include <fmt/ranges.h>
 
 #include <cmath>
 #include <limits>
-#include <vector>
 
 #include "coarsegrain/scene/scene.hpp"
 #include "json_reader.hpp"
@@ -12,17 +10,6 @@
 namespace coarsegrain::scene {
 
 namespace {
-
-/// A string among `choices`; returns its position.
-std::size_t parse_choice(const JsonReader& r, std::initializer_list<const char*> choices) {
-    const std::string s = r.string();
-    std::vector<std::string> quoted;
-    for (const char* c : choices) {
-        if (s == c) return quoted.size();
-        quoted.push_back(fmt::format("\"{}\"", c));
-    }
-    r.fail("unknown value \"{}\"; expected one of {}", s, fmt::join(quoted, ", "));
-}
 
 double parse_radius(const JsonReader& r) {
     if (r.json().is_string()) {
@@ -37,12 +24,12 @@ double parse_radius(const JsonReader& r) {
 
 homogenize::Options parse_homogenize(const JsonReader& r) {
     homogenize::Options o;
-    if (auto v = r.find("normals")) o.coarse_normals = parse_choice(*v, {"coarse", "fine"}) == 0;
-    if (auto v = r.find("boundary")) o.mixed_boundary = parse_choice(*v, {"neumann", "mixed"}) == 1;
-    if (auto v = r.find("map")) o.harmonic_map = parse_choice(*v, {"barycentric", "harmonic"}) == 1;
+    if (auto v = r.find("normals")) o.coarse_normals = v->choice({"coarse", "fine"}) == 0;
+    if (auto v = r.find("boundary")) o.mixed_boundary = v->choice({"neumann", "mixed"}) == 1;
+    if (auto v = r.find("map")) o.harmonic_map = v->choice({"barycentric", "harmonic"}) == 1;
     if (auto v = r.find("mass"))
-        o.mass = static_cast<homogenize::CoarseMass>(
-            parse_choice(*v, {"lumped", "consistent", "galerkin"}));
+        o.mass =
+            static_cast<homogenize::CoarseMass>(v->choice({"lumped", "consistent", "galerkin"}));
     return o;
 }
 
@@ -51,8 +38,7 @@ mra::Options parse_mra(const JsonReader& r) {
     Options o;
     if (auto v = r.find("levels")) o.levels = static_cast<int>(v->integer(2, kMaxLevels));
     if (auto v = r.find("refinement"))
-        o.refinement = parse_choice(*v, {"dirac", "linear"}) == 0 ? Refinement::Dirac
-                                                                  : Refinement::Linear;
+        o.refinement = v->choice({"dirac", "linear"}) == 0 ? Refinement::Dirac : Refinement::Linear;
     if (auto v = r.find("radius")) {
         if (v->json().is_array()) {
             const std::size_t n = v->array_size();
@@ -66,17 +52,15 @@ mra::Options parse_mra(const JsonReader& r) {
         }
     }
     if (auto v = r.find("radius_grid"))
-        o.radius_grid =
-            parse_choice(*v, {"fine", "coarse"}) == 0 ? RadiusGrid::Fine : RadiusGrid::Coarse;
+        o.radius_grid = v->choice({"fine", "coarse"}) == 0 ? RadiusGrid::Fine : RadiusGrid::Coarse;
     if (auto v = r.find("localization"))
-        o.localization =
-            parse_choice(*v, {"node", "cell"}) == 0 ? Localization::Node : Localization::Cell;
+        o.localization = v->choice({"node", "cell"}) == 0 ? Localization::Node : Localization::Cell;
     if (auto v = r.find("measurement"))
-        o.measurement = parse_choice(*v, {"canonical", "stiffness"}) == 0 ? Measurement::Canonical
-                                                                          : Measurement::Stiffness;
+        o.measurement = v->choice({"canonical", "stiffness"}) == 0 ? Measurement::Canonical
+                                                                   : Measurement::Stiffness;
     if (auto v = r.find("operator"))
         o.fine_operator =
-            parse_choice(*v, {"stiffness", "step"}) == 0 ? Operator::Stiffness : Operator::Step;
+            v->choice({"stiffness", "step"}) == 0 ? Operator::Stiffness : Operator::Step;
     if (auto v = r.find("defect_tolerance")) {
         o.defect_tolerance = v->number();
         v->fail_unless(o.defect_tolerance >= 0, "expected a number >= 0 (0: fixed radius), got {}",
@@ -99,8 +83,8 @@ mra::Options parse_mra(const JsonReader& r) {
             DirichletTreatment::Constrain, DirichletTreatment::Eliminate,
             DirichletTreatment::Penalty, DirichletTreatment::DiagonalPenalty,
             DirichletTreatment::Ignore};
-        o.dirichlet = treatments[parse_choice(
-            *v, {"constrain", "eliminate", "penalty", "diagonal_penalty", "ignore"})];
+        o.dirichlet = treatments[v->choice(
+            {"constrain", "eliminate", "penalty", "diagonal_penalty", "ignore"})];
     }
     try {
         validate(o);  // the combinations; each key's range is checked above

@@ -10,18 +10,12 @@ sim::CorotationOptions parse_corotation_options(const nlohmann::json& corotation
     const JsonReader r(corotation, "corotation", source);
     r.allow_only({"frame", "tangent", "tolerance", "max_iterations", "max_bisections"});
     sim::CorotationOptions o;
-    if (auto v = r.find("frame")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "de_veubeke" || s == "polar",
-                       "unknown value \"{}\"; expected \"de_veubeke\" or \"polar\"", s);
-        o.frame = s == "polar" ? fem::CorotationFrame::Polar : fem::CorotationFrame::DeVeubeke;
-    }
-    if (auto v = r.find("tangent")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "consistent" || s == "fixed_frame",
-                       "unknown value \"{}\"; expected \"consistent\" or \"fixed_frame\"", s);
-        o.tangent = s == "consistent" ? sim::Tangent::Consistent : sim::Tangent::FixedFrame;
-    }
+    if (auto v = r.find("frame"))
+        o.frame = v->choice({"de_veubeke", "polar"}) == 0 ? fem::CorotationFrame::DeVeubeke
+                                                          : fem::CorotationFrame::Polar;
+    if (auto v = r.find("tangent"))
+        o.tangent = v->choice({"consistent", "fixed_frame"}) == 0 ? sim::Tangent::Consistent
+                                                                  : sim::Tangent::FixedFrame;
     if (auto v = r.find("tolerance")) {
         o.tolerance = v->positive();
         v->fail_unless(o.tolerance < 1, "expected a relative residual in (0, 1), got {}",

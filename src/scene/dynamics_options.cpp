@@ -11,21 +11,15 @@ sim::DynamicsOptions parse_dynamics_options(const nlohmann::json& dynamics,
     r.allow_only({"integrator", "dt", "steps", "output_every", "start", "initial_velocity",
                   "damping", "mass"});
     sim::DynamicsOptions o;
-    if (auto v = r.find("integrator")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "midpoint" || s == "implicit_euler",
-                       "unknown value \"{}\"; expected \"midpoint\" or \"implicit_euler\"", s);
-        o.integrator = s == "midpoint" ? sim::Integrator::Midpoint : sim::Integrator::ImplicitEuler;
-    }
+    if (auto v = r.find("integrator"))
+        o.integrator = v->choice({"midpoint", "implicit_euler"}) == 0
+                           ? sim::Integrator::Midpoint
+                           : sim::Integrator::ImplicitEuler;
     o.dt = r.at("dt").positive();
     o.steps = static_cast<int>(r.at("steps").integer(1, sim::kMaxSteps));
     if (auto v = r.find("output_every")) o.output_every = static_cast<int>(v->integer(1, o.steps));
-    if (auto v = r.find("start")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "rest" || s == "static",
-                       "unknown value \"{}\"; expected \"rest\" or \"static\"", s);
-        o.start = s == "rest" ? sim::Start::Rest : sim::Start::Static;
-    }
+    if (auto v = r.find("start"))
+        o.start = v->choice({"rest", "static"}) == 0 ? sim::Start::Rest : sim::Start::Static;
     if (auto v = r.find("initial_velocity")) {
         const std::size_t n = v->array_size();
         v->fail_unless(n == 2 || n == 3, "expected 2 or 3 numbers (one per axis), got {}",
@@ -42,12 +36,9 @@ sim::DynamicsOptions parse_dynamics_options(const nlohmann::json& dynamics,
         o.rayleigh_mass = ab[0];
         o.rayleigh_stiffness = ab[1];
     }
-    if (auto v = r.find("mass")) {
-        const std::string s = v->string();
-        v->fail_unless(s == "consistent" || s == "lumped",
-                       "unknown value \"{}\"; expected \"consistent\" or \"lumped\"", s);
-        o.mass = s == "consistent" ? fem::MassType::Consistent : fem::MassType::Lumped;
-    }
+    if (auto v = r.find("mass"))
+        o.mass = v->choice({"consistent", "lumped"}) == 0 ? fem::MassType::Consistent
+                                                          : fem::MassType::Lumped;
     return o;
 }
 

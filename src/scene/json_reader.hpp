@@ -91,6 +91,17 @@ public:
         fail_unless(m_j.is_string(), "expected a string, got {}", m_j.dump());
         return m_j.get<std::string>();
     }
+    /// A string among `choices`; returns its position.
+    std::size_t choice(std::initializer_list<const char*> choices) const {
+        const std::string s = string();
+        std::string quoted;
+        std::size_t i = 0;
+        for (const char* c : choices) {
+            if (s == c) return i;
+            quoted += fmt::format("{}\"{}\"", i++ == 0 ? "" : ", ", c);
+        }
+        fail("unknown value \"{}\"; expected one of {}", s, quoted);
+    }
     /// An array of exactly n finite numbers.
     Eigen::VectorXd vector(int n) const {
         fail_unless(m_j.is_array() && static_cast<int>(m_j.size()) == n,

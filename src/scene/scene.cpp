@@ -321,18 +321,10 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     }
     if (auto c = root.find("coarse")) s.coarse = parse_coarse_options(c->json(), s.source);
     if (auto d = root.find("dynamics")) s.dynamics = parse_dynamics_options(d->json(), s.source);
-    if (auto k = root.find("kinematics")) {
-        const std::string v = k->string();
-        k->fail_unless(v == "linear" || v == "corotational",
-                       "unknown value \"{}\"; expected \"linear\" or \"corotational\"", v);
-        s.kinematics = v == "linear" ? sim::Kinematics::Linear : sim::Kinematics::Corotational;
-    }
-    if (auto w = root.find("warp")) {
-        const std::string v = w->string();
-        w->fail_unless(v == "none" || v == "rs",
-                       "unknown value \"{}\"; expected \"none\" or \"rs\"", v);
-        s.rs_warp = v == "rs";
-    }
+    if (auto k = root.find("kinematics"))
+        s.kinematics = k->choice({"linear", "corotational"}) == 0 ? sim::Kinematics::Linear
+                                                                  : sim::Kinematics::Corotational;
+    if (auto w = root.find("warp")) s.rs_warp = w->choice({"none", "rs"}) == 1;
     if (auto c = root.find("corotation")) {
         c->fail_unless(s.kinematics == sim::Kinematics::Corotational,
                        "applies to \"kinematics\": \"corotational\" only; add that key or "
@@ -682,20 +674,17 @@ StaticSolution solve_corotated(const FineModel& model, const Scene& scene, Timin
     const fem::CorotatedModel corotated(model.mesh, model.materials, scene.formulation,
                                         scene.corotation.frame);
     StaticSolution s;
-    explaining_singular(model, [&] {
-        try {
+    try {
+        explaining_singular(model, [&] {
             sim::CorotatedSolution c = sim::solve_corotated_static(
                 corotated, model.f, model.bc, scene.corotation, node_options, timings);
             s.u = std::move(c.u);
             s.strain_energy = c.energy;
             s.newton = std::move(c.report);
-        } catch (const solve::NotConverged& e) {
-            // Newton's own failure is no singular model: keep it from explaining_singular.
-            if (std::string(e.what()).starts_with("corotated solve"))
-                throw Error(fmt::format("{}: {}", model.source, e.what()));
-            throw;  // conjugate gradients inside an iteration
-        }
-    });
+        });
+    } catch (const sim::NewtonFailed& e) {
+        throw sim::NewtonFailed(fmt::format("{}: {}", model.source, e.what()));
+    }
     return s;
 }
 

@@ -241,7 +241,7 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
         ++sol.report.bisections;
         size /= 2;
         if (size < smallest)
-            throw solve::NotConverged(fmt::format(
+            throw NewtonFailed(fmt::format(
                 "corotated solve: Newton's method did not converge beyond load factor {:.6g} "
                 "(an increment of {:.3g} failed after {} iterations in all, relative residual "
                 "{:.3g} > corotation.tolerance {:g}); the load may buckle or invert elements, "

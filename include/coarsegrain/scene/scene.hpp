@@ -177,8 +177,8 @@ StaticSolution solve_static(const FineModel& model, const solve::SolverOptions& 
 /// Solves the scene's fine model with corotated kinematics (Kharevych et al. 2009, Sec. 4):
 /// sim::solve_corotated_static with the scene's formulation, "corotation" options and solver
 /// (node-blocked ordering). Phases "newton", "factorize" and "solve".
-/// @throws NotPositiveDefinite as solve_static; Error naming the source if Newton's method
-///         fails at the smallest load increment
+/// @throws NotPositiveDefinite as solve_static; sim::NewtonFailed naming the source if
+///         Newton's method fails at the smallest load increment
 StaticSolution solve_corotated(const FineModel& model, const Scene& scene,
                                Timings* timings = nullptr);
 

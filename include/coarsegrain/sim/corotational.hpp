@@ -13,6 +13,13 @@
 
 namespace coarsegrain::sim {
 
+/// Newton's method did not reach its tolerance at the smallest load increment (not a singular
+/// model: that is NotPositiveDefinite).
+class NewtonFailed : public Error {
+  public:
+    using Error::Error;
+};
+
 /// "linear" or "corotational" (scene "kinematics").
 enum class Kinematics { Linear, Corotational };
 
@@ -90,7 +97,7 @@ struct CorotatedSolution {
 /// residual decides. Phases "newton" (evaluations) and "factorize", "solve" go to `timings`.
 /// @throws Error if sizes disagree or the options are out of range; NotPositiveDefinite if the
 ///         first tangent (for zero prescribed values: the stiffness) is singular or not
-///         definite (the conditions do not hold the model); NotConverged naming the load
+///         definite (the conditions do not hold the model); NewtonFailed naming the load
 ///         factor reached, the iterations and the residual if the smallest increment fails
 CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const Vector& f,
                                          const fem::Dirichlet& bc, const CorotationOptions& options,
