@@ -1,7 +1,10 @@
 #include "coarsegrain/sim/corotational.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/solve/lu_solver.hpp"
@@ -23,32 +26,48 @@ constexpr double kRoundOffFactor = 4;
 /// v restricted to the free DOFs.
 Vector restrict(const Vector& v, const IndexVector& free) { return v(free); }
 
-/// Newton's method for one load increment (λ f, λ u_D), from u (updated in place; u holds the
-/// prescribed values λ u_D). Returns whether it converged.
-class Increment {
+/// The equations f_int(w) + A w = b on the free DOFs, w holding the prescribed values on the
+/// others: a static load increment (no A, b = λ f) or one implicit time step.
+struct Balance {
+    Vector b;                         ///< num_dofs
+    const SparseMatrix* A = nullptr;  ///< num_dofs square, symmetric (none: 0)
+    double load_factor = 1;           ///< λ, for the history
+};
+
+/// Newton's method for one Balance.
+class Newton {
   public:
-    Increment(const fem::CorotatedModel& model, const Vector& load, const fem::Dirichlet& bc,
-              const IndexVector& free, double reference, const CorotationOptions& options,
-              solve::SpdSolver& solver, NewtonReport& report, Timings* timings)
+    Newton(const fem::CorotatedModel& model, const fem::Dirichlet& bc, const IndexVector& free,
+           const CorotationOptions& options, solve::SpdSolver& solver, Timings* timings)
         : m_model(model),
-          m_load(load),
           m_bc(bc),
           m_free(free),
-          m_reference(reference),
           m_options(options),
           m_solver(solver),
-          m_report(report),
           m_timings(timings) {}
 
-    /// Newton's method for the increment, from u (updated in place): first with full steps,
-    /// watched (full_steps), then, if those stop making progress, again from u with the line
-    /// search. Returns whether it converged within max_iterations in all.
-    bool run(Vector& u, double load_factor) {
+    /// Newton's method for `balance` from u (updated in place), converged when the residual is
+    /// at most tolerance times `reference`: first with full steps, watched (iterate), then, if
+    /// those stop making progress, again from u with the line search. Returns whether it
+    /// converged within max_iterations in all; the iterations go to `report`.
+    bool run(Vector& u, const Balance& balance, double reference, NewtonReport& report) {
+        m_balance = &balance;
+        m_reference = reference;
+        m_report = &report;
         const Vector start = u;
         int budget = m_options.max_iterations;
-        if (iterate(u, load_factor, false, budget)) return true;
+        if (iterate(u, false, budget)) return true;
         u = start;
-        return budget > 0 && iterate(u, load_factor, true, budget);
+        return budget > 0 && iterate(u, true, budget);
+    }
+
+    /// One Newton iteration for `balance` from u (updated in place), a full step.
+    void linearized(Vector& u, const Balance& balance, NewtonReport& report) {
+        m_balance = &balance;
+        m_report = &report;
+        const fem::CorotatedModel::State state = evaluate(u);
+        u(m_free) += newton_step(state, residual(state, u));
+        ++report.iterations;
     }
 
     /// Newton iterations from u, at most `budget` (decremented), with the line search or with
@@ -58,10 +77,10 @@ class Increment {
     /// from 0 to 30, and the next three steps converged), but if kWatchdog steps in a row
     /// lower neither the residual nor the potential below their values before them, the
     /// iteration stops. Returns whether it converged.
-    bool iterate(Vector& u, double load_factor, bool line_search, int& budget) {
+    bool iterate(Vector& u, bool line_search, int& budget) {
         fem::CorotatedModel::State state = evaluate(u);
-        Vector r = residual(state, load_factor);
-        double watched_residual = r.norm(), watched_potential = potential(state, u, load_factor);
+        Vector r = residual(state, u);
+        double watched_residual = r.norm(), watched_potential = potential(state, u);
         int unwatched = 0;
         for (; budget > 0; --budget) {
             if (converged(r, state)) return true;
@@ -71,21 +90,21 @@ class Increment {
             } catch (const NotPositiveDefinite&) {
                 // The first tangent is (for zero prescribed values) the linear stiffness: the
                 // model itself is singular. Later: a buckled state; try a smaller increment.
-                if (m_report.iterations == 0) throw;
+                if (m_report->iterations == 0) throw;
                 return false;
             } catch (const solve::SingularMatrix& e) {
-                if (m_report.iterations == 0) throw NotPositiveDefinite(e.what());
+                if (m_report->iterations == 0) throw NotPositiveDefinite(e.what());
                 return false;
             }
-            ++m_report.iterations;
-            const double step = line_search ? search(u, state, r, d, load_factor) : 1.0;
+            ++m_report->iterations;
+            const double step = line_search ? search(u, state, r, d) : 1.0;
             if (step == 0) return false;
             if (!line_search) {
                 u(m_free) += d;
                 state = evaluate(u);
-                r = residual(state, load_factor);
+                r = residual(state, u);
                 if (!r.allFinite()) return false;
-                const double p = potential(state, u, load_factor);
+                const double p = potential(state, u);
                 if (r.norm() < watched_residual || p < watched_potential) {
                     watched_residual = std::min(watched_residual, r.norm());
                     watched_potential = std::min(watched_potential, p);
@@ -95,15 +114,16 @@ class Increment {
                     return false;
                 }
             }
-            m_report.history.push_back({load_factor, r.norm() / m_reference, step});
+            m_report->history.push_back(
+                {m_balance->load_factor, r.norm() / m_reference, step});
         }
         return converged(r, state);
     }
 
-    /// Π = W - λ fᵀu.
-    double potential(const fem::CorotatedModel::State& state, const Vector& u,
-                     double load_factor) const {
-        return state.energy - load_factor * m_load.dot(u);
+    /// Π = W + ½ uᵀA u - bᵀu.
+    double potential(const fem::CorotatedModel::State& state, const Vector& u) const {
+        const double quadratic = m_balance->A ? 0.5 * u.dot(*m_balance->A * u) : 0.0;
+        return state.energy + quadratic - m_balance->b.dot(u);
     }
 
     /// The backtracking line search along d from u (state, residual r): updates them to the
@@ -113,17 +133,16 @@ class Increment {
     /// dwarfs the load while its energy stays small, so Π accepts the steps the residual would
     /// cut; near equilibrium, where Π's gradient and the force part by their O(|û|²), the
     /// residual takes over.
-    double search(Vector& u, fem::CorotatedModel::State& state, Vector& r, const Vector& d,
-                  double load_factor) const {
-        const double p = potential(state, u, load_factor);
+    double search(Vector& u, fem::CorotatedModel::State& state, Vector& r, const Vector& d) const {
+        const double p = potential(state, u);
         const double slope = r.dot(d);  // -dΠ/ds at s = 0 (to O(|û|²))
         for (double step = 1; step >= kMinStep; step /= 2) {
             Vector trial = u;
             trial(m_free) += step * d;
             fem::CorotatedModel::State trial_state = evaluate(trial);
-            Vector trial_r = residual(trial_state, load_factor);
+            Vector trial_r = residual(trial_state, trial);
             const bool descent =
-                slope > 0 && potential(trial_state, trial, load_factor) <= p - 1e-4 * step * slope;
+                slope > 0 && potential(trial_state, trial) <= p - 1e-4 * step * slope;
             if (descent || trial_r.norm() <= (1 - step / 4) * r.norm()) {
                 u = std::move(trial);
                 state = std::move(trial_state);
@@ -140,10 +159,11 @@ class Increment {
                std::max(m_options.tolerance * m_reference, kRoundOffFactor * state.round_off);
     }
 
-    /// The Newton step T^{-1} r with the tangent at `state` on the free DOFs.
+    /// The Newton step T^{-1} r with the tangent at `state` (plus A) on the free DOFs.
     Vector newton_step(const fem::CorotatedModel::State& state, const Vector& r) {
         const bool consistent = m_options.tangent == Tangent::Consistent;
-        const SparseMatrix T = consistent ? m_model.jacobian(state) : m_model.tangent(state);
+        SparseMatrix T = consistent ? m_model.jacobian(state) : m_model.tangent(state);
+        if (m_balance->A) T += *m_balance->A;
         const fem::ReducedSystem sys = fem::reduce(T, Vector::Zero(T.rows()), m_bc);
         {
             const Phase phase("factorize", m_timings);
@@ -162,28 +182,43 @@ class Increment {
         return m_model.evaluate(u);
     }
 
-    /// λ f - f_int(u) on the free DOFs.
-    Vector residual(const fem::CorotatedModel::State& state, double load_factor) const {
-        return restrict(load_factor * m_load - state.force, m_free);
+    /// b - f_int(u) - A u on the free DOFs, for the state at u.
+    Vector residual(const fem::CorotatedModel::State& state, const Vector& u) const {
+        Vector r = m_balance->b - state.force;
+        if (m_balance->A) r -= *m_balance->A * u;
+        return restrict(r, m_free);
     }
 
   private:
     const fem::CorotatedModel& m_model;
-    const Vector& m_load;
     const fem::Dirichlet& m_bc;
     const IndexVector& m_free;
-    double m_reference;
     const CorotationOptions& m_options;
     solve::SpdSolver& m_solver;
     solve::SparseLu m_lu;
-    NewtonReport& m_report;
     Timings* m_timings;
+    const Balance* m_balance = nullptr;
+    double m_reference = 1;
+    NewtonReport* m_report = nullptr;
 };
+
+/// Checks the Newton options' ranges.
+void validate(const CorotationOptions& options) {
+    CG_VERIFY(options.tolerance > 0 && options.tolerance < 1,
+              "corotation.tolerance: expected a number in (0, 1), got {}", options.tolerance);
+    CG_VERIFY(options.max_iterations >= 1 && options.max_bisections >= 0,
+              "corotation: max_iterations must be >= 1 and max_bisections >= 0, got {} and {}",
+              options.max_iterations, options.max_bisections);
+}
 
 }  // namespace
 
 std::string tangent_name(Tangent tangent) {
     return tangent == Tangent::Consistent ? "consistent" : "fixed_frame";
+}
+
+std::string step_iterations_name(StepIterations iterations) {
+    return iterations == StepIterations::Newton ? "newton" : "linearized";
 }
 
 std::string kinematics_name(Kinematics kinematics) {
@@ -196,11 +231,7 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
                                          Timings* timings) {
     const Index n = model.num_dofs();
     CG_VERIFY(f.size() == n, "corotated solve: load of size {} for {} DOFs", f.size(), n);
-    CG_VERIFY(options.tolerance > 0 && options.tolerance < 1,
-              "corotation.tolerance: expected a number in (0, 1), got {}", options.tolerance);
-    CG_VERIFY(options.max_iterations >= 1 && options.max_bisections >= 0,
-              "corotation: max_iterations must be >= 1 and max_bisections >= 0, got {} and {}",
-              options.max_iterations, options.max_bisections);
+    validate(options);
     const IndexVector free = fem::free_dofs(n, bc);
     const auto prescribed = [&](double load_factor) {
         Vector u = Vector::Zero(n);
@@ -221,7 +252,7 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
         return sol;
     }
     solve::SpdSolver solver(solver_options);
-    Increment increment(model, f, bc, free, reference, options, solver, sol.report, timings);
+    Newton newton(model, bc, free, options, solver, timings);
     Vector u = prescribed(0);
 
     double done = 0, size = 1;
@@ -231,7 +262,8 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
         Vector trial = u;
         for (std::size_t i = 0; i < bc.dofs.size(); ++i)
             trial[bc.dofs[i]] = load_factor * bc.values[static_cast<Index>(i)];
-        if (increment.run(trial, load_factor)) {
+        const Balance balance{load_factor * f, nullptr, load_factor};
+        if (newton.run(trial, balance, reference, sol.report)) {
             u = std::move(trial);
             done = load_factor;
             ++sol.report.increments;
@@ -250,12 +282,144 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
                 sol.report.history.empty() ? 1.0 : sol.report.history.back().residual,
                 options.tolerance));
     }
-    const fem::CorotatedModel::State state = increment.evaluate(u);
-    sol.report.residual = increment.residual(state, 1).norm() / reference;
+    const fem::CorotatedModel::State state = newton.evaluate(u);
+    sol.report.residual = restrict(f - state.force, free).norm() / reference;
     sol.report.round_off = kRoundOffFactor * state.round_off / reference;
     sol.energy = state.energy;
     sol.u = std::move(u);
     return sol;
+}
+
+struct CorotatedStepper::Impl {
+    Impl(const fem::CorotatedModel& model_, const SparseMatrix& M_, const fem::Dirichlet& bc_,
+         const DynamicsOptions& dynamics_, const CorotationOptions& corotation_,
+         const solve::SolverOptions& solver_)
+        : model(model_),
+          M(M_),
+          bc(bc_),
+          dynamics(dynamics_),
+          corotation(corotation_),
+          free(fem::free_dofs(model_.num_dofs(), bc_)),
+          solver(solver_),
+          newton(model, bc, free, corotation, solver, nullptr) {}
+
+    const fem::CorotatedModel& model;
+    const SparseMatrix& M;
+    fem::Dirichlet bc;
+    DynamicsOptions dynamics;
+    CorotationOptions corotation;
+    IndexVector free;
+    solve::SpdSolver solver;
+    Newton newton;
+};
+
+CorotatedStepper::CorotatedStepper(const fem::CorotatedModel& model, const SparseMatrix& M,
+                                   const fem::Dirichlet& bc, const DynamicsOptions& dynamics,
+                                   const CorotationOptions& corotation,
+                                   const solve::SolverOptions& solver) {
+    validate(dynamics);
+    validate(corotation);
+    const Index n = model.num_dofs();
+    CG_VERIFY(M.rows() == n && M.cols() == n,
+              "corotated time stepping: mass {}x{} for a model of {} DOFs", M.rows(), M.cols(), n);
+    m_impl = std::make_unique<Impl>(model, M, bc, dynamics, corotation, solver);
+}
+
+CorotatedStepper::~CorotatedStepper() = default;
+CorotatedStepper::CorotatedStepper(CorotatedStepper&&) noexcept = default;
+CorotatedStepper& CorotatedStepper::operator=(CorotatedStepper&&) noexcept = default;
+
+Index CorotatedStepper::dofs() const { return m_impl->model.num_dofs(); }
+
+NewtonReport CorotatedStepper::step(State& s, const Vector& f) {
+    Impl& m = *m_impl;
+    const Index n = dofs();
+    CG_VERIFY(s.u.size() == n && s.v.size() == n && f.size() == n,
+              "corotated time stepping: state ({}, {}) and load ({}) must have {} entries",
+              s.u.size(), s.v.size(), f.size(), n);
+    const DynamicsOptions& o = m.dynamics;
+    const double dt = o.dt;
+    const bool midpoint = o.integrator == Integrator::Midpoint;
+    // f_int(w) + A w = b with A = c_M M + c_C C and C = α M + β K_R (frames of the start).
+    const double cM = midpoint ? 4 / (dt * dt) : 1 / (dt * dt), cC = midpoint ? 2 / dt : 1 / dt;
+    const double h = midpoint ? dt / 2 : dt;  // w = u + h v at constant velocity
+    const fem::CorotatedModel::State start = m.model.evaluate(s.u);
+    SparseMatrix A = (cM + cC * o.rayleigh_mass) * m.M;
+    Vector b = f + cM * (m.M * (s.u + h * s.v));
+    if (o.rayleigh_mass > 0) b += cC * o.rayleigh_mass * (m.M * s.u);
+    if (o.rayleigh_stiffness > 0) {
+        const SparseMatrix KR = m.model.tangent(start);
+        A += cC * o.rayleigh_stiffness * KR;
+        b += cC * o.rayleigh_stiffness * (KR * s.u);
+    }
+    const Balance balance{std::move(b), &A, 1};
+
+    NewtonReport report;
+    report.increments = 1;
+    Vector w = s.u;
+    if (m.corotation.step == StepIterations::Linearized) {
+        m.newton.linearized(w, balance, report);
+    } else {
+        // The step's force scale: the residual at its start, dominated by the inertia 2 M v/dt
+        // (Euler M v/dt) when the body moves, or the internal force when it rests.
+        const Vector r0 = balance.b - start.force - A * s.u;
+        const double reference =
+            std::max(restrict(r0, m.free).norm(), restrict(start.force, m.free).norm());
+        if (!m.newton.run(w, balance, reference, report))
+            throw NewtonFailed(fmt::format(
+                "corotated time step: Newton's method did not converge in {} iterations "
+                "(relative residual {:.3g} > corotation.tolerance {:g}); reduce dynamics.dt "
+                "or raise corotation.max_iterations",
+                report.iterations,
+                report.history.empty() ? 1.0 : report.history.back().residual,
+                m.corotation.tolerance));
+        report.residual = report.history.empty() ? 0.0 : report.history.back().residual;
+    }
+    for (const Index d : m.free) {
+        if (midpoint) {
+            const double du = w[d] - s.u[d];
+            s.v[d] = 4 * du / dt - s.v[d];
+            s.u[d] += 2 * du;
+        } else {
+            s.v[d] = (w[d] - s.u[d]) / dt;
+            s.u[d] = w[d];
+        }
+    }
+    return report;
+}
+
+double CorotatedStepper::energy(const State& s, const Vector& f) const {
+    return 0.5 * s.v.dot(m_impl->M * s.v) + m_impl->model.evaluate(s.u).energy - f.dot(s.u);
+}
+
+std::pair<State, Vector> corotated_initial_state(const fem::CorotatedModel& model, const Vector& f,
+                                                 const fem::Dirichlet& bc, const Vector& v0,
+                                                 const DynamicsOptions& dynamics,
+                                                 const CorotationOptions& corotation,
+                                                 const solve::SolverOptions& solver) {
+    return initial_state(model.num_dofs(), f, bc, v0, dynamics, [&] {
+        return solve_corotated_static(model, f, bc, corotation, solver).u;
+    });
+}
+
+Trajectory simulate_corotated(const fem::CorotatedModel& model, const SparseMatrix& M,
+                              const fem::Dirichlet& bc, const State& start, const Vector& f,
+                              const DynamicsOptions& dynamics, const CorotationOptions& corotation,
+                              const solve::SolverOptions& solver, const std::string& name) {
+    CorotatedStepper stepper(model, M, bc, dynamics, corotation, solver);
+    int k = 0;
+    return run_steps(
+        start, dynamics, M,
+        [&](State& s) {
+            ++k;
+            try {
+                return stepper.step(s, f).iterations;
+            } catch (const NewtonFailed& e) {
+                throw NewtonFailed(fmt::format("step {} (t = {:g}): {}", k, k * dynamics.dt,
+                                               e.what()));
+            }
+        },
+        [&](const State& s) { return stepper.energy(s, f); }, name);
 }
 
 }  // namespace coarsegrain::sim

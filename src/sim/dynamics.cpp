@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -148,11 +149,9 @@ Vector uniform_field(Index dofs, const Eigen::VectorXd& velocity) {
     return velocity.replicate(dofs / dim, 1);
 }
 
-std::pair<State, Vector> initial_state(const SparseMatrix& K, const Vector& f,
-                                       const fem::Dirichlet& bc, const Vector& v0,
-                                       const DynamicsOptions& options,
-                                       const solve::SolverOptions& solver) {
-    const Index n = K.rows();
+std::pair<State, Vector> initial_state(Index n, const Vector& f, const fem::Dirichlet& bc,
+                                       const Vector& v0, const DynamicsOptions& options,
+                                       const std::function<Vector()>& static_solution) {
     CG_VERIFY(f.size() == n && (v0.size() == 0 || v0.size() == n),
               "initial state: load ({}) and velocity ({}) must have {} entries", f.size(),
               v0.size(), n);
@@ -160,7 +159,7 @@ std::pair<State, Vector> initial_state(const SparseMatrix& K, const Vector& f,
     s.v = v0.size() ? v0 : Vector::Zero(n);
     for (Index d : bc.dofs) s.v[d] = 0;
     if (options.start == Start::Static) {
-        s.u = fem::solve_static(K, f, bc, solver);
+        s.u = static_solution();
         return {std::move(s), Vector::Zero(n)};
     }
     s.u = Vector::Zero(n);
@@ -169,33 +168,75 @@ std::pair<State, Vector> initial_state(const SparseMatrix& K, const Vector& f,
     return {std::move(s), f};
 }
 
+std::pair<State, Vector> initial_state(const SparseMatrix& K, const Vector& f,
+                                       const fem::Dirichlet& bc, const Vector& v0,
+                                       const DynamicsOptions& options,
+                                       const solve::SolverOptions& solver) {
+    return initial_state(K.rows(), f, bc, v0, options,
+                         [&] { return fem::solve_static(K, f, bc, solver); });
+}
+
+double Trajectory::energy_drift() const {
+    double drift = 0, kinetic_max = 0;
+    for (std::size_t i = 0; i < energy.size(); ++i) {
+        drift = std::max(drift, std::abs(energy[i] - energy[0]));
+        kinetic_max = std::max(kinetic_max, kinetic[i]);
+    }
+    return kinetic_max > 0 ? drift / kinetic_max : 0.0;
+}
+
+Trajectory run_steps(const State& start, const DynamicsOptions& options, const SparseMatrix& M,
+                     const Step& step, const std::function<double(const State&)>& energy,
+                     const std::string& name) {
+    Trajectory t;
+    State s = start;
+    const auto save = [&](double time, int iterations, double seconds) {
+        t.times.push_back(time);
+        t.u.push_back(s.u);
+        t.energy.push_back(energy(s));
+        t.kinetic.push_back(0.5 * s.v.dot(M * s.v));
+        t.iterations.push_back(iterations);
+        t.step_seconds.push_back(seconds);
+    };
+    save(0, 0, 0);
+    StepProgress progress(name.empty() ? "model" : name, options.steps);
+    double stepping = 0, since_frame = 0;
+    int iterations = 0;
+    for (int k = 1; k <= options.steps; ++k) {
+        const auto begin = std::chrono::steady_clock::now();
+        iterations += step(s);
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+        stepping += seconds;
+        since_frame += seconds;
+        if (k % options.output_every == 0) {
+            save(k * options.dt, iterations, since_frame);
+            iterations = 0;
+            since_frame = 0;
+        }
+        progress.tick(k);
+    }
+    t.per_step_seconds = stepping / options.steps;
+    return t;
+}
+
 Trajectory simulate(const SparseMatrix& K, const SparseMatrix& M, const fem::Dirichlet& bc,
                     const State& start, const Vector& f, const DynamicsOptions& options,
                     const solve::SolverOptions& solver, const std::string& name) {
-    Trajectory t;
     Timings timings;
     std::optional<TimeStepper> stepper;
     {
         const Phase phase(name.empty() ? "factorize" : name + " factorize", &timings);
         stepper.emplace(K, M, bc, options, solver);
     }
+    Trajectory t = run_steps(
+        start, options, M,
+        [&](State& s) {
+            stepper->step(s, f);
+            return 1;
+        },
+        [&](const State& s) { return stepper->energy(s, f); }, name);
     t.factorize_seconds = timings.entries().back().second;
-    State s = start;
-    t.times.push_back(0);
-    t.u.push_back(s.u);
-    StepProgress progress(name.empty() ? "model" : name, options.steps);
-    double stepping = 0;
-    for (int k = 1; k <= options.steps; ++k) {
-        const auto begin = std::chrono::steady_clock::now();
-        stepper->step(s, f);
-        stepping += std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-        if (k % options.output_every == 0) {
-            t.times.push_back(k * options.dt);
-            t.u.push_back(s.u);
-        }
-        progress.tick(k);
-    }
-    t.per_step_seconds = stepping / options.steps;
     return t;
 }
 

@@ -111,11 +111,33 @@ class TimeStepper {
 
 /// Saved frames of a run.
 struct Trajectory {
-    std::vector<double> times;  ///< t = 0 and every output_every-th step
-    std::vector<Vector> u;      ///< displacement over all DOFs at each saved time
+    std::vector<double> times;   ///< t = 0 and every output_every-th step
+    std::vector<Vector> u;       ///< displacement over all DOFs at each saved time
+    std::vector<double> energy;  ///< the stepper's discrete energy at each saved time
+    std::vector<double> kinetic;  ///< ½ vᵀM v at each saved time
+    /// Solves with the step matrix of the steps since the previous saved time (0 at t = 0): one
+    /// per step for linear models, the Newton iterations for corotated ones.
+    std::vector<int> iterations;
+    std::vector<double> step_seconds;  ///< wall time of those steps
     double factorize_seconds = 0;
     double per_step_seconds = 0;  ///< wall time of the step loop / steps (frames not included)
+
+    /// max_i |energy_i - energy_0| / max_i kinetic_i (0 if the body never moves): the drift of
+    /// the discrete energy against the largest kinetic energy of the run.
+    double energy_drift() const;
 };
+
+/// One step of a model: advances the state and returns its solves with the step matrix.
+using Step = std::function<int(State& s)>;
+
+/// The step loop of simulate and simulate_corotated: options.steps steps of `step` from
+/// `start`, a frame (with energy(state) and ½ vᵀM v) saved every options.output_every steps and
+/// at t = 0. Progress ("<name> time stepping", steps per second) goes to stderr for runs longer
+/// than a second.
+/// @throws whatever step throws
+Trajectory run_steps(const State& start, const DynamicsOptions& options, const SparseMatrix& M,
+                     const Step& step, const std::function<double(const State&)>& energy,
+                     const std::string& name);
 
 /// The initial state and the load held during the run, by options.start: Rest gives u = bc
 /// values, load f; Static gives u = the static solution of f (one extra factorization of K),
@@ -125,6 +147,13 @@ std::pair<State, Vector> initial_state(const SparseMatrix& K, const Vector& f,
                                        const fem::Dirichlet& bc, const Vector& v0,
                                        const DynamicsOptions& options,
                                        const solve::SolverOptions& solver = {});
+
+/// initial_state of an n-DOF model whose static solution of f, for options.start Static, is
+/// `static_solution()` (not called otherwise).
+/// @throws Error if f or v0 has the wrong size; whatever static_solution throws
+std::pair<State, Vector> initial_state(Index n, const Vector& f, const fem::Dirichlet& bc,
+                                       const Vector& v0, const DynamicsOptions& options,
+                                       const std::function<Vector()>& static_solution);
 
 /// A velocity field that is `velocity` (size dim) at every node of an n-DOF interleaved model.
 Vector uniform_field(Index dofs, const Eigen::VectorXd& velocity);
