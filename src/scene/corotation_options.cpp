@@ -8,7 +8,7 @@ namespace coarsegrain::scene {
 sim::CorotationOptions parse_corotation_options(const nlohmann::json& corotation,
                                                 const std::string& source) {
     const JsonReader r(corotation, "corotation", source);
-    r.allow_only({"frame", "tangent", "tolerance", "max_iterations", "max_bisections"});
+    r.allow_only({"frame", "tangent", "tolerance", "max_iterations", "max_bisections", "step"});
     sim::CorotationOptions o;
     if (auto v = r.find("frame"))
         o.frame = v->choice({"de_veubeke", "polar"}) == 0 ? fem::CorotationFrame::DeVeubeke
@@ -24,6 +24,9 @@ sim::CorotationOptions parse_corotation_options(const nlohmann::json& corotation
     if (auto v = r.find("max_iterations"))
         o.max_iterations = static_cast<int>(v->integer(1, 100'000));
     if (auto v = r.find("max_bisections")) o.max_bisections = static_cast<int>(v->integer(0, 40));
+    if (auto v = r.find("step"))
+        o.step = v->choice({"newton", "linearized"}) == 0 ? sim::StepIterations::Newton
+                                                          : sim::StepIterations::Linearized;
     return o;
 }
 
