@@ -63,24 +63,37 @@ CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions
     return s;
 }
 
-CoarseSolution solve_coarse_corotated(const CoarseModel& model,
-                                      const sim::CorotationOptions& corotation,
-                                      const solve::SolverOptions& options, Timings* timings) {
+fem::CorotatedModel corotated_model(const CoarseModel& model, fem::CorotationFrame frame) {
     CG_VERIFY(model.element_model.has_value(),
               "coarse model {}: corotated kinematics need an element model (a coarse mesh and "
               "its tensors); the hierarchy's coarse DOFs are none",
               model.method);
+    const ElementModel& e = *model.element_model;
+    fem::CorotatedModel corotated(e.mesh, e.materials, fem::Formulation::Standard, frame,
+                                  e.dof_map);
+    CG_VERIFY(corotated.num_dofs() == model.K.rows(),
+              "coarse model {}: {} element model DOFs for {} DOFs", model.method,
+              corotated.num_dofs(), model.K.rows());
+    return corotated;
+}
+
+solve::SolverOptions node_solver_options(const CoarseModel& model,
+                                         const solve::SolverOptions& options) {
+    solve::SolverOptions node_options = options;
+    if (const auto& e = model.element_model)
+        node_options.node_dofs = e->dof_map.size() ? 1 : e->mesh.dim();
+    return node_options;
+}
+
+CoarseSolution solve_coarse_corotated(const CoarseModel& model,
+                                      const sim::CorotationOptions& corotation,
+                                      const solve::SolverOptions& options, Timings* timings) {
     const Index n = model.K.rows();
     CG_VERIFY(model.f.size() == n && model.to_fine.cols() == n,
               "coarse model {}: K is {}x{}, f has {} entries, to_fine has {} columns", model.method,
               model.K.rows(), model.K.cols(), model.f.size(), model.to_fine.cols());
-    const ElementModel& e = *model.element_model;
-    solve::SolverOptions node_options = options;
-    node_options.node_dofs = e.dof_map.size() == 0 ? e.mesh.dim() : 1;
-    const fem::CorotatedModel corotated(e.mesh, e.materials, fem::Formulation::Standard,
-                                        corotation.frame, e.dof_map);
-    CG_VERIFY(corotated.num_dofs() == n, "coarse model {}: {} element model DOFs for {} DOFs",
-              model.method, corotated.num_dofs(), n);
+    const fem::CorotatedModel corotated = corotated_model(model, corotation.frame);
+    const solve::SolverOptions node_options = node_solver_options(model, options);
     CoarseSolution s;
     try {
         sim::CorotatedSolution c = sim::solve_corotated_static(corotated, model.f, model.bc,

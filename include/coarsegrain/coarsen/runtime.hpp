@@ -25,6 +25,16 @@ struct CoarseSolution {
 CoarseSolution solve_coarse(const CoarseModel& model, const solve::SolverOptions& options,
                             Timings* timings = nullptr);
 
+/// The corotated model of a coarse model's elements (CoarseModel::element_model: each element
+/// rotates its own tensor), over the model's DOFs (through its DOF map, if any).
+/// @throws Error if the model has no element model (mra) or its DOFs disagree with it
+fem::CorotatedModel corotated_model(const CoarseModel& model, fem::CorotationFrame frame);
+
+/// `options` with the node blocking of an element model's DOFs (node_dofs = dim for nodal DOFs,
+/// 1 when its DOF map combines them); unchanged for a model without elements.
+solve::SolverOptions node_solver_options(const CoarseModel& model,
+                                         const solve::SolverOptions& options);
+
 /// Solves the coarse model with corotated kinematics: sim::solve_corotated_static on its element
 /// model (CoarseModel::element_model, each element rotating its own tensor) with model.f and
 /// model.bc, and maps u to the fine nodes. Phases "newton", "factorize" and "solve".
