@@ -680,9 +680,11 @@ void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
             continue;
         }
         const nlohmann::json& frames = e["coarse"]["frames"];
-        const std::string name = e["method"].get<std::string>() +
-                                 (frames["warp"] == "rs" ? " (+warp)" : "") +
-                                 (frames["kinematics"] != summary["kinematics"] ? " (linear)" : "");
+        const bool linear_here = frames["kinematics"] != summary["kinematics"];
+        const std::string name =
+            e["method"].get<std::string>() +
+            (frames["warp"] == "rs" ? (linear_here ? " (linear+warp)" : " (+warp)")
+                                    : (linear_here ? " (linear)" : ""));
         std::printf("  %-20s %9d %12.4f %12.3e %7.2f %9.1fx %12.4g %10s\n", name.c_str(),
                     e["coarse"]["dofs"].get<int>(),
                     e["timings"]["coarse"]["factorize"].get<double>(),

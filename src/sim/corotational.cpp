@@ -303,6 +303,12 @@ struct CorotatedStepper::Impl {
           solver(solver_),
           newton(model, bc, free, corotation, solver, nullptr) {}
 
+    /// Advances s by dt: one step, or if its Newton solve fails, two of dt/2 (each halved
+    /// again on failure, up to corotation.max_bisections times).
+    void advance(State& s, const Vector& f, double dt, int depth, NewtonReport& report);
+    /// One step of dt from s (updated if it converged); returns whether it did.
+    bool attempt(State& s, const Vector& f, double dt, NewtonReport& report);
+
     const fem::CorotatedModel& model;
     const SparseMatrix& M;
     fem::Dirichlet bc;
@@ -332,50 +338,70 @@ CorotatedStepper& CorotatedStepper::operator=(CorotatedStepper&&) noexcept = def
 Index CorotatedStepper::dofs() const { return m_impl->model.num_dofs(); }
 
 NewtonReport CorotatedStepper::step(State& s, const Vector& f) {
-    Impl& m = *m_impl;
     const Index n = dofs();
     CG_VERIFY(s.u.size() == n && s.v.size() == n && f.size() == n,
               "corotated time stepping: state ({}, {}) and load ({}) must have {} entries",
               s.u.size(), s.v.size(), f.size(), n);
-    const DynamicsOptions& o = m.dynamics;
-    const double dt = o.dt;
+    NewtonReport report;
+    m_impl->advance(s, f, m_impl->dynamics.dt, 0, report);
+    return report;
+}
+
+void CorotatedStepper::Impl::advance(State& s, const Vector& f, double dt, int depth,
+                                     NewtonReport& report) {
+    State trial = s;
+    if (attempt(trial, f, dt, report)) {
+        s = std::move(trial);
+        ++report.increments;
+        return;
+    }
+    if (depth == corotation.max_bisections)
+        throw NewtonFailed(fmt::format(
+            "corotated time step: Newton's method did not converge at a step of {:.3g} ({} "
+            "halvings of dynamics.dt; {} iterations in all, relative residual {:.3g} > "
+            "corotation.tolerance {:g}); reduce dynamics.dt or raise corotation.max_iterations "
+            "/ max_bisections",
+            dt, depth, report.iterations,
+            report.history.empty() ? 1.0 : report.history.back().residual,
+            corotation.tolerance));
+    ++report.bisections;
+    advance(s, f, dt / 2, depth + 1, report);
+    advance(s, f, dt / 2, depth + 1, report);
+}
+
+bool CorotatedStepper::Impl::attempt(State& s, const Vector& f, double dt,
+                                     NewtonReport& report) {
+    const DynamicsOptions& o = dynamics;
     const bool midpoint = o.integrator == Integrator::Midpoint;
     // f_int(w) + A w = b with A = c_M M + c_C C and C = α M + β K_R (frames of the start).
     const double cM = midpoint ? 4 / (dt * dt) : 1 / (dt * dt), cC = midpoint ? 2 / dt : 1 / dt;
     const double h = midpoint ? dt / 2 : dt;  // w = u + h v at constant velocity
-    const fem::CorotatedModel::State start = m.model.evaluate(s.u);
-    SparseMatrix A = (cM + cC * o.rayleigh_mass) * m.M;
-    Vector b = f + cM * (m.M * (s.u + h * s.v));
-    if (o.rayleigh_mass > 0) b += cC * o.rayleigh_mass * (m.M * s.u);
+    const fem::CorotatedModel::State start = model.evaluate(s.u);
+    SparseMatrix A = (cM + cC * o.rayleigh_mass) * M;
+    Vector b = f + cM * (M * (s.u + h * s.v));
+    if (o.rayleigh_mass > 0) b += cC * o.rayleigh_mass * (M * s.u);
     if (o.rayleigh_stiffness > 0) {
-        const SparseMatrix KR = m.model.tangent(start);
+        const SparseMatrix KR = model.tangent(start);
         A += cC * o.rayleigh_stiffness * KR;
         b += cC * o.rayleigh_stiffness * (KR * s.u);
     }
     const Balance balance{std::move(b), &A, 1};
 
-    NewtonReport report;
-    report.increments = 1;
     Vector w = s.u;
-    if (m.corotation.step == StepIterations::Linearized) {
-        m.newton.linearized(w, balance, report);
+    if (corotation.step == StepIterations::Linearized) {
+        newton.linearized(w, balance, report);
     } else {
         // The step's force scale: the residual at its start, dominated by the inertia 2 M v/dt
         // (Euler M v/dt) when the body moves, or the internal force when it rests.
         const Vector r0 = balance.b - start.force - A * s.u;
         const double reference =
-            std::max(restrict(r0, m.free).norm(), restrict(start.force, m.free).norm());
-        if (!m.newton.run(w, balance, reference, report))
-            throw NewtonFailed(fmt::format(
-                "corotated time step: Newton's method did not converge in {} iterations "
-                "(relative residual {:.3g} > corotation.tolerance {:g}); reduce dynamics.dt "
-                "or raise corotation.max_iterations",
-                report.iterations,
-                report.history.empty() ? 1.0 : report.history.back().residual,
-                m.corotation.tolerance));
-        report.residual = report.history.empty() ? 0.0 : report.history.back().residual;
+            std::max(restrict(r0, free).norm(), restrict(start.force, free).norm());
+        const std::size_t before = report.history.size();
+        if (!newton.run(w, balance, reference, report)) return false;
+        report.residual = std::max(
+            report.residual, report.history.size() > before ? report.history.back().residual : 0.0);
     }
-    for (const Index d : m.free) {
+    for (const Index d : free) {
         if (midpoint) {
             const double du = w[d] - s.u[d];
             s.v[d] = 4 * du / dt - s.v[d];
@@ -385,7 +411,7 @@ NewtonReport CorotatedStepper::step(State& s, const Vector& f) {
             s.u[d] = w[d];
         }
     }
-    return report;
+    return true;
 }
 
 double CorotatedStepper::energy(const State& s, const Vector& f) const {

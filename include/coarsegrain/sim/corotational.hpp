@@ -70,7 +70,8 @@ struct CorotationOptions {
     double tolerance = 1e-8;
     /// Newton iterations per load increment before the increment is halved.
     int max_iterations = 60;
-    /// Halvings of a load increment (from the whole load) before the solve gives up.
+    /// Halvings of a load increment (from the whole load), or of a time step (CorotatedStepper),
+    /// before the solve gives up.
     int max_bisections = 10;
     /// The Newton iterations of a time step (CorotatedStepper; statics ignore it).
     StepIterations step = StepIterations::Newton;
@@ -151,11 +152,16 @@ class CorotatedStepper {
     CorotatedStepper(CorotatedStepper&&) noexcept;
     CorotatedStepper& operator=(CorotatedStepper&&) noexcept;
 
-    /// Advances `s` by one step under the load f; returns how its Newton solve went
-    /// (`residual` relative to the step's force scale; `increments` 1).
+    /// Advances `s` by one step of dt under the load f; returns how its Newton solves went:
+    /// `increments` the sub-steps taken, `bisections` the halvings, `residual` the largest
+    /// final relative residual. A step whose Newton solve does not converge within
+    /// corotation.max_iterations is replaced by two steps of dt/2 (each halved again on
+    /// failure, at most corotation.max_bisections deep): a smaller step converges more easily,
+    /// as A grows as 1/dt² (the coarse accordion under strong gravity needs it where the
+    /// force's non-potential part, O(|K||û|²), misleads the line search's merits).
     /// @throws Error on size mismatch; NotPositiveDefinite / solve::SingularMatrix if the step's
-    ///         matrix is; NewtonFailed if Newton's method does not reach the tolerance within
-    ///         corotation.max_iterations (a smaller dt converges faster: A grows as 1/dt²)
+    ///         matrix is; NewtonFailed naming the smallest step if a step of dt /
+    ///         2^max_bisections does not converge
     NewtonReport step(State& s, const Vector& f);
     /// Discrete energy ½ vᵀM v + W(u) - fᵀu (kinetic + corotated strain - work of f).
     double energy(const State& s, const Vector& f) const;
