@@ -225,7 +225,7 @@ TEST(CliCorotational, SimulateStepsElementModelsCorotatedAndWarpsTheHierarchy) {
 // from rest under gravity 50, corotated: its tip swings down by 0.89 of the beam's section in
 // half a period (30 midpoint steps). Coarse: the 8x2x2-cell tet mesh (243 DOFs) and the
 // hierarchy's third level (243 DOFs). The effective tensors follow the corotated fine swing
-// (measured trajectory l2 0.099) where naive averaging, 180 times too stiff, hardly moves
+// (measured trajectory l2 0.10) where naive averaging, 180 times too stiff, hardly moves
 // (0.997): at least 3 times better. The hierarchy, linear and RS-warped, is reported (measured
 // 0.005; the linear fine model: 0.108).
 TEST(CliCorotationalSlow, AccordionSwingEffectiveTensorsBeatNaiveAveraging) {
