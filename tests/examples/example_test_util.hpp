@@ -12,8 +12,8 @@
 
 namespace coarsegrain::test {
 
-/// A run of an example: the top `summary.json` of `coarsen --method ...` (one method, a list, or
-/// `all`).
+/// A run of an example: the top `summary.json` of `coarsen` or `simulate --method ...` (one
+/// method, a list, or `all`).
 struct ExampleRun {
     nlohmann::json summary;
     std::string out;  ///< the output folder
@@ -63,7 +63,8 @@ inline void expect_galerkin_projection(const ExampleRun& r, const std::string& m
 }
 
 /// Runs examples/<name>/<name>.json with `patch` merged into it (RFC 7386: the reduced size), as
-/// `coarsegrain coarsen --method methods`, in a fresh temporary folder holding a copy of the
+/// `coarsegrain coarsen --method methods` (`simulate` if the scene has a "dynamics" block, as
+/// examples/run_all does), in a fresh temporary folder holding a copy of the
 /// example's files. An example with a
 /// `make_mesh` script first makes its meshes there with the mesh size scaled by `mesh_factor`
 /// (the factor is not passed when it is 1). The pictures are not made (COARSEGRAIN_PYTHON=false):
@@ -91,7 +92,8 @@ inline ExampleRun run_example(const std::string& name, const nlohmann::json& pat
     ExampleRun r;
     r.out = dir + "/out";
     std::string output;
-    std::string command = "COARSEGRAIN_PYTHON=false " COARSEGRAIN_CLI " --quiet coarsen ";
+    std::string command = "COARSEGRAIN_PYTHON=false " COARSEGRAIN_CLI " --quiet ";
+    command += scene.contains("dynamics") ? "simulate " : "coarsen ";
     command += file + " --method " + methods + " --out " + r.out;
     const int code = run(command, &output);
     EXPECT_EQ(code, 0) << output;
