@@ -91,6 +91,12 @@ int main(int argc, char** argv) {
         ->check(CLI::Validator(check_methods, "METHOD[,METHOD...]|all"))
         ->capture_default_str();
     coarsen->add_option("--out", coarsen_out, "output folder")->capture_default_str();
+    std::string coarsen_export;
+    coarsen
+        ->add_option("--export", coarsen_export,
+                     "inp: also write each coarse element model as a CalculiX / Abaqus deck, "
+                     "coarse_model.inp (not for the hierarchy)")
+        ->check(CLI::IsMember({"inp"}));
     coarsen->footer(
         "Methods: effective-tensor (Kharevych et al. 2009: one anisotropic tensor per element of\n"
         "coarse.mesh); naive, voigt, reuss (averages of the Lame parameters, tensors, compliances\n"
@@ -101,7 +107,8 @@ int main(int argc, char** argv) {
         "(neumann|mixed) and coarse.map (barycentric|harmonic); the averages read coarse.mesh.\n"
         "Files: summary.json, solution_fine.vtu, solution_coarse.vtu; with a coarse.mesh method\n"
         "also coarse_model.vtu (the coarse mesh with its tensors: a scene mesh that `coarsegrain\n"
-        "solve` simulates without the fine mesh) and, for effective-tensor, harmonic.vtu.\n"
+        "solve` simulates without the fine mesh) and, for effective-tensor, harmonic.vtu;\n"
+        "with --export inp, coarse_model.inp (a CalculiX / Abaqus deck of that model).\n"
         "Several methods compare them: DIR/<method>/ holds each one's files, and DIR/report.md\n"
         "the table and pictures (as `coarsegrain demo`).\n"
         "See docs/guide.md, \"Coarsening\".");
@@ -179,7 +186,7 @@ int main(int argc, char** argv) {
             const cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
             const double read = since_start();
             failed = cg::app::run_coarsen(sc, selected_methods(sc, method), coarsen_out, "coarsen",
-                                          read);
+                                          read, {coarsen_export == "inp"});
         } else if (*simulate) {
             const cg::scene::Scene sc = cg::scene::load_scene(sim_scene);
             const double read = since_start();

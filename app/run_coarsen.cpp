@@ -1,5 +1,6 @@
 #include "run_coarsen.hpp"
 
+#include <fmt/format.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/io/file_util.hpp"
+#include "coarsegrain/io/inp_export.hpp"
 #include "method_json.hpp"
 #include "output.hpp"
 #include "plots.hpp"
@@ -174,13 +176,27 @@ nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene
     return made;
 }
 
+/// Writes an element model as a CalculiX deck (Exports::calculix).
+/// @throws Error naming the method if its Dirichlet conditions hold DOFs in combination
+void write_calculix(const scene::Scene& sc, const coarsen::CoarseModel& coarse,
+                    const fs::path& file) {
+    const coarsen::ElementModel& e = *coarse.element_model;
+    CG_VERIFY(e.dof_map.size() == 0,
+              "--export inp: the {} model holds its Dirichlet conditions on combinations of its "
+              "nodes' DOFs (no coarse node lies where the fine ones are prescribed), which a deck "
+              "of nodes and elements cannot state; put coarse nodes on the prescribed faces",
+              coarse.method);
+    io::write_calculix_deck(file.string(), e.mesh, e.materials, coarse.f, coarse.bc, sc.plane,
+                            fmt::format("coarsegrain {} model of {}", coarse.method, sc.source));
+}
+
 /// Builds, solves and compares one method against the fine run; writes its files and its
 /// summary.json to `dir`. `fine_vtu` is the fine solution's file as seen from `dir`; if
 /// `write_fine_vtu`, it is written there once the coarse model is built (so that a method that
 /// fails on its input leaves no file). With `keep_model` the result holds the coarse model.
 MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& method,
                         const fs::path& dir, const std::string& fine_vtu, bool write_fine_vtu,
-                        bool keep_model = false) {
+                        const Exports& exports, bool keep_model = false) {
     const scene::FineModel& fine = f.model;
     const Vector& u = f.solution.u;
     const int dim = fine.mesh.dim();
@@ -200,6 +216,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         io::write_vtu((dir / "solution_coarse.vtu").string(), fine.mesh, fields);
         for (const coarsen::VtuOutput& o : coarse.outputs)
             io::write_vtu((dir / o.file).string(), o.mesh, o.fields);
+        if (exports.calculix) write_calculix(sc, coarse, dir / "coarse_model.inp");
     }
     nlohmann::json coarse_json = method_json(coarse.report);
     const nlohmann::json plots =
@@ -275,9 +292,9 @@ void print_method_table(const scene::Scene& sc, const std::string& method, const
 }
 
 void run_one(const scene::Scene& sc, const std::string& method, const fs::path& dir,
-             double read_seconds) {
+             double read_seconds, const Exports& exports) {
     FineRun f = solve_fine(sc, {method}, read_seconds);
-    const MethodResult r = run_method(sc, f, method, dir, "solution_fine.vtu", true);
+    const MethodResult r = run_method(sc, f, method, dir, "solution_fine.vtu", true, exports);
     print_method_table(sc, method, f, r);
     std::printf(
         "  wrote %s/summary.json, solution_fine.vtu, solution_coarse.vtu and the method's "
@@ -288,11 +305,11 @@ void run_one(const scene::Scene& sc, const std::string& method, const fs::path& 
 // One method of a comparison: its result, or its failure (the reason, and no folder) if it
 // cannot run on this scene or fails while it builds or solves.
 MethodResult try_method(const scene::Scene& sc, FineRun& f, const std::string& method,
-                        const fs::path& dir, bool keep_model) {
+                        const fs::path& dir, const Exports& exports, bool keep_model) {
     const fs::path sub = dir / method;
     try {
         io::ensure_writable_dir(sub.string());
-        return run_method(sc, f, method, sub, "../solution_fine.vtu", false, keep_model);
+        return run_method(sc, f, method, sub, "../solution_fine.vtu", false, exports, keep_model);
     } catch (const Error& e) {
         std::error_code ec;
         fs::remove_all(sub, ec);
@@ -313,10 +330,11 @@ struct Comparison {
 /// The fine solve, then every method against it (their folders in `dir`), and the fine
 /// solution's file. With `keep_models` each result holds its coarse model.
 Comparison compare_methods(const scene::Scene& sc, const std::vector<std::string>& methods,
-                           const fs::path& dir, double read_seconds, bool keep_models) {
+                           const fs::path& dir, double read_seconds, const Exports& exports,
+                           bool keep_models) {
     Comparison c{solve_fine(sc, methods, read_seconds), {}};
     for (const std::string& method : methods)
-        c.results.push_back(try_method(sc, c.fine, method, dir, keep_models));
+        c.results.push_back(try_method(sc, c.fine, method, dir, exports, keep_models));
     c.fine.solution.factorization.reset();  // used by the methods only
     if (c.fine.linear) c.fine.linear->factorization.reset();
     write_fine(c.fine, dir);
@@ -377,8 +395,9 @@ int finish_comparison(const scene::Scene& sc, const std::string& command, const 
 }
 
 int run_comparison(const scene::Scene& sc, const std::vector<std::string>& methods,
-                   const fs::path& dir, const std::string& command, double read_seconds) {
-    const Comparison c = compare_methods(sc, methods, dir, read_seconds, false);
+                   const fs::path& dir, const std::string& command, double read_seconds,
+                   const Exports& exports) {
+    const Comparison c = compare_methods(sc, methods, dir, read_seconds, exports, false);
     const int failed = finish_comparison(sc, command, c, dir, nullptr);
     std::printf(
         "  wrote %s/report.md, summary.json, solution_fine.vtu and a folder per method "
@@ -390,16 +409,24 @@ int run_comparison(const scene::Scene& sc, const std::vector<std::string>& metho
 }  // namespace
 
 int run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
-                const std::string& out_dir, const std::string& command, double read_seconds) {
+                const std::string& out_dir, const std::string& command, double read_seconds,
+                const Exports& exports) {
+    if (exports.calculix)
+        for (const std::string& method : methods)
+            CG_VERIFY(method.rfind("mra", 0) != 0,
+                      "--export inp: {} is not an element model (the hierarchy's coarse DOFs are "
+                      "weights of its basis functions, not nodes of elements); export "
+                      "effective-tensor, naive, voigt or reuss",
+                      method);
     if (methods.size() == 1) {
         coarsen::validate_method(sc, methods.front());
         const OutputFolder folder(out_dir);
-        run_one(sc, methods.front(), out_dir, read_seconds);
+        run_one(sc, methods.front(), out_dir, read_seconds, exports);
         return 0;
     }
     check_methods(sc, methods);
     const OutputFolder folder(out_dir);
-    return run_comparison(sc, methods, out_dir, command, read_seconds);
+    return run_comparison(sc, methods, out_dir, command, read_seconds, exports);
 }
 
 int run_demo(const scene::Scene& sc, const std::string& out_dir, double read_seconds) {
@@ -409,7 +436,7 @@ int run_demo(const scene::Scene& sc, const std::string& out_dir, double read_sec
     check_methods(sc, methods);
     const OutputFolder folder(out_dir);
     const fs::path dir(out_dir);
-    Comparison c = compare_methods(sc, methods, dir, read_seconds, true);
+    Comparison c = compare_methods(sc, methods, dir, read_seconds, {}, true);
     std::vector<BuiltModel> built;
     for (MethodResult& r : c.results) {
         if (r.model) built.push_back({r.method, std::move(*r.model)});

@@ -6,6 +6,13 @@
 
 namespace coarsegrain::app {
 
+/// Files `coarsen` writes on request (command-line options).
+struct Exports {
+    /// --export inp: DIR[/<method>]/coarse_model.inp, the coarse element model as a CalculiX /
+    /// Abaqus deck (io::write_calculix_deck); the hierarchy (mra*) has none.
+    bool calculix = false;
+};
+
 /// Solves the scene's static problem once on the fine model and once on the coarse model of each
 /// method, and compares them. Prints a table on stdout.
 ///
@@ -18,12 +25,15 @@ namespace coarsegrain::app {
 /// A method of a comparison that cannot run on the scene, or fails while it builds or solves, is
 /// reported (stderr, the table, report.md, and its row of "methods" with "error": the reason)
 /// and the others still run; summary.json "failed_methods" counts them.
+/// With exports.calculix each method's folder also gets coarse_model.inp (Exports).
 /// @param[in] command       "coarsen" or "demo" (summary.json "command")
 /// @param[in] read_seconds  time already spent reading the scene (reported as "read")
 /// @return the number of methods that failed (0 with one method: its failure throws)
-/// @throws Error before any work if the only method, or every method, cannot run on the scene
+/// @throws Error before any work if the only method, or every method, cannot run on the scene,
+///         or exports.calculix is asked of a method without an element model (mra*)
 int run_coarsen(const scene::Scene& scene, const std::vector<std::string>& methods,
-                const std::string& out_dir, const std::string& command, double read_seconds);
+                const std::string& out_dir, const std::string& command, double read_seconds,
+                const Exports& exports = {});
 
 /// `coarsegrain demo`: the comparison of every method the scene configures (run_coarsen with
 /// command "demo"), then a dynamic run of the same fine model and of the coarse models the

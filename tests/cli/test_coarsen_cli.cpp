@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "cli/cli_test_util.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
@@ -400,3 +401,38 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& p) { return p.param.name; });
 
 }  // namespace
+
+// --export inp writes each element model as a CalculiX deck that ccx runs: its largest nodal
+// displacement is the coarse solution's (coarsen's max_displacement: the barycentric map's
+// largest displacement is at a coarse node), to ccx's 7 printed digits (2 units of the 7th).
+TEST(CliCoarsen, ExportInpWritesDecksThatCalculixRuns) {
+    const std::string dir = temp_dir("cli_coarsen_export");
+    const Result r = cli("coarsen " + write_scene(dir, coarse_scene()) +
+                         " --method effective-tensor,naive --export inp --out " + dir + "/out");
+    ASSERT_EQ(r.code, 0) << r.output;
+    for (const char* method : {"effective-tensor", "naive"}) {
+        const std::string sub = dir + "/out/" + method;
+        ASSERT_TRUE(fs::exists(sub + "/coarse_model.inp")) << method;
+        std::string output;
+        ASSERT_EQ(run("cd " + sub + " && ccx -i coarse_model", &output), 0) << output;
+        std::ifstream dat(sub + "/coarse_model.dat");
+        std::string line;
+        while (std::getline(dat, line) && line.find("displacements") == std::string::npos) {
+        }
+        double largest = 0;
+        while (std::getline(dat, line)) {
+            std::istringstream s(line);
+            int node = 0;
+            double x = 0, y = 0, z = 0;
+            if (s >> node >> x >> y >> z) largest = std::max(largest, std::sqrt(x * x + y * y + z * z));
+        }
+        const double expected = read_json(sub + "/summary.json")["max_displacement"].get<double>();
+        EXPECT_NEAR(largest, expected, 2e-6 * expected) << method;
+    }
+    // The hierarchy is no element model: refused before any work, nothing written.
+    const Result mra = cli("coarsen " + write_scene(dir, coarse_scene()) +
+                           " --method mra-linear --export inp --out " + dir + "/mra");
+    EXPECT_NE(mra.code, 0);
+    EXPECT_THAT(mra.output, HasSubstr("--export inp: mra-linear is not an element model"));
+    EXPECT_FALSE(fs::exists(dir + "/mra"));
+}
