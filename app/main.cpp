@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
     coarsen
         ->add_option("--export", coarsen_export,
                      "inp: also write each coarse element model as a CalculiX / Abaqus deck, "
-                     "coarse_model.inp (not for the hierarchy)")
+                     "coarse_model.inp, and the hierarchy's matrices as Matrix Market files")
         ->check(CLI::IsMember({"inp"}));
     coarsen->footer(
         "Methods: effective-tensor (Kharevych et al. 2009: one anisotropic tensor per element of\n"
@@ -108,7 +108,8 @@ int main(int argc, char** argv) {
         "Files: summary.json, solution_fine.vtu, solution_coarse.vtu; with a coarse.mesh method\n"
         "also coarse_model.vtu (the coarse mesh with its tensors: a scene mesh that `coarsegrain\n"
         "solve` simulates without the fine mesh) and, for effective-tensor, harmonic.vtu;\n"
-        "with --export inp, coarse_model.inp (a CalculiX / Abaqus deck of that model).\n"
+        "with --export inp, coarse_model.inp (a CalculiX / Abaqus deck of that model; the\n"
+        "hierarchy: coarse_K.mtx, coarse_M.mtx, coarse_f.mtx and to_fine.mtx).\n"
         "Several methods compare them: DIR/<method>/ holds each one's files, and DIR/report.md\n"
         "the table and pictures (as `coarsegrain demo`).\n"
         "See docs/guide.md, \"Coarsening\".");

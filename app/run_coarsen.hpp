@@ -9,7 +9,9 @@ namespace coarsegrain::app {
 /// Files `coarsen` writes on request (command-line options).
 struct Exports {
     /// --export inp: DIR[/<method>]/coarse_model.inp, the coarse element model as a CalculiX /
-    /// Abaqus deck (io::write_calculix_deck); the hierarchy (mra*) has none.
+    /// Abaqus deck (io::write_calculix_deck); the hierarchy (mra*), which is no element model,
+    /// as Matrix Market files instead (coarse_K.mtx, coarse_M.mtx, coarse_f.mtx,
+    /// coarse_dirichlet.mtx if it has conditions, to_fine.mtx if the map is not too large).
     bool calculix = false;
 };
 
@@ -29,8 +31,7 @@ struct Exports {
 /// @param[in] command       "coarsen" or "demo" (summary.json "command")
 /// @param[in] read_seconds  time already spent reading the scene (reported as "read")
 /// @return the number of methods that failed (0 with one method: its failure throws)
-/// @throws Error before any work if the only method, or every method, cannot run on the scene,
-///         or exports.calculix is asked of a method without an element model (mra*)
+/// @throws Error before any work if the only method, or every method, cannot run on the scene
 int run_coarsen(const scene::Scene& scene, const std::vector<std::string>& methods,
                 const std::string& out_dir, const std::string& command, double read_seconds,
                 const Exports& exports = {});
