@@ -1,6 +1,7 @@
 #include "coarsegrain/io/inp_export.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <array>
 #include <ostream>
@@ -70,7 +71,8 @@ Matrix embed_plane_tensor(const Matrix& C2) {
 void write_calculix_deck(const std::string& file, const mesh::Mesh& mesh,
                          const material::ElementMaterials& materials, const Vector& f,
                          const fem::Dirichlet& bc, material::PlaneMode plane,
-                         const std::string& heading) {
+                         const std::string& heading,
+                         const std::optional<CalculixDynamics>& dynamics) {
     const int dim = mesh.dim();
     CG_VERIFY(f.size() == mesh.num_dofs() && materials.size() == mesh.num_elements(),
               "{}: the load has {} entries and the materials {} elements for a mesh of {} DOFs "
@@ -81,6 +83,24 @@ void write_calculix_deck(const std::string& file, const mesh::Mesh& mesh,
     for (const Index d : bc.dofs)
         CG_VERIFY(d >= 0 && d < mesh.num_dofs(),
                   "{}: prescribed DOF {} is not one of the mesh's {}", file, d, mesh.num_dofs());
+    const bool lumped = dynamics && dynamics->lumped_mass.size() > 0;
+    if (dynamics) {
+        const Index n = mesh.num_dofs();
+        CG_VERIFY(dynamics->dt > 0 && dynamics->steps >= 1 && dynamics->output_every >= 1,
+                  "{}: dynamic step of dt {} and {} steps", file, dynamics->dt, dynamics->steps);
+        CG_VERIFY(
+            (!lumped || dynamics->lumped_mass.size() == n) &&
+                (dynamics->initial_velocity.size() == 0 || dynamics->initial_velocity.size() == n),
+            "{}: lumped masses ({}) and initial velocity ({}) must have {} entries", file,
+            dynamics->lumped_mass.size(), dynamics->initial_velocity.size(), n);
+        for (Index v = 0; lumped && v < mesh.num_nodes(); ++v) {
+            const auto m = dynamics->lumped_mass.segment(dim * v, dim);
+            CG_VERIFY(m.maxCoeff() - m.minCoeff() <= 1e-12 * m.cwiseAbs().maxCoeff(),
+                      "{}: node {} has lumped masses {} that differ between its components, "
+                      "which a *MASS element cannot hold",
+                      file, v + 1, fmt::join(m, ", "));
+        }
+    }
     write_atomically(file, [&](std::ostream& out) {
         out << "*HEADING\n" << heading << "\n*NODE, NSET=NALL\n";
         for (Index v = 0; v < mesh.num_nodes(); ++v) {
@@ -112,7 +132,7 @@ void write_calculix_deck(const std::string& file, const mesh::Mesh& mesh,
             out << fmt::format("*MATERIAL, NAME=M{}\n*ELASTIC, TYPE=ANISO\n", m + 1);
             for (std::size_t k = 0; k < d.size(); ++k)
                 out << number(d[k]) << (k == 7 || k == 15 || k + 1 == d.size() ? "\n" : ", ");
-            out << "*DENSITY\n" << number(mat.density) << '\n';
+            out << "*DENSITY\n" << number(lumped ? 1e-30 * mat.density : mat.density) << '\n';
             out << fmt::format("*SOLID SECTION, ELSET=E{}, MATERIAL=M{}\n", m + 1, m + 1);
             if (dim == 2) out << "1.\n";  // thickness
         }
@@ -125,7 +145,28 @@ void write_calculix_deck(const std::string& file, const mesh::Mesh& mesh,
                     << number(bc.values[static_cast<Index>(i)]) << '\n';
             }
         }
-        out << "*STEP\n*STATIC\n";
+        if (lumped) {
+            out << "*ELEMENT, TYPE=MASS, ELSET=EMASS\n";
+            for (Index v = 0; v < mesh.num_nodes(); ++v)
+                out << mesh.num_elements() + v + 1 << ", " << v + 1 << '\n';
+            for (Index v = 0; v < mesh.num_nodes(); ++v)
+                out << fmt::format("*ELSET, ELSET=MASS{}\n{}\n*MASS, ELSET=MASS{}\n{}\n", v + 1,
+                                   mesh.num_elements() + v + 1, v + 1,
+                                   number(dynamics->lumped_mass[dim * v]));
+        }
+        if (dynamics && dynamics->initial_velocity.size() > 0) {
+            out << "*INITIAL CONDITIONS, TYPE=VELOCITY\n";
+            for (Index d = 0; d < mesh.num_dofs(); ++d)
+                if (dynamics->initial_velocity[d] != 0)
+                    out << d / dim + 1 << ", " << d % dim + 1 << ", "
+                        << number(dynamics->initial_velocity[d]) << '\n';
+        }
+        if (dynamics)
+            out << fmt::format("*STEP, INC={}\n*DYNAMIC, DIRECT, ALPHA=0\n{}, {}\n",
+                               dynamics->steps + 1, number(dynamics->dt),
+                               number(dynamics->dt * dynamics->steps));
+        else
+            out << "*STEP\n*STATIC\n";
         bool any_load = false;
         for (Index d = 0; d < f.size(); ++d) {
             if (f[d] == 0) continue;
@@ -133,7 +174,11 @@ void write_calculix_deck(const std::string& file, const mesh::Mesh& mesh,
             any_load = true;
             out << d / dim + 1 << ", " << d % dim + 1 << ", " << number(f[d]) << '\n';
         }
-        out << "*NODE PRINT, NSET=NALL\nU\n*END STEP\n";
+        if (dynamics)
+            out << "*NODE PRINT, NSET=NALL, FREQUENCY=" << dynamics->output_every << "\nU\n";
+        else
+            out << "*NODE PRINT, NSET=NALL\nU\n";
+        out << "*END STEP\n";
     });
 }
 

@@ -18,6 +18,7 @@
 /// plane stress (σ33 = 0, hence ε33 = 0 without coupling) then both give the 2D tensor's
 /// in-plane response exactly; the out-of-plane stresses ccx reports are not the model's.
 #include <array>
+#include <optional>
 #include <string>
 
 #include "coarsegrain/common/types.hpp"
@@ -35,6 +36,20 @@ std::array<double, 21> calculix_aniso(const Matrix& C_mandel);
 /// comment).
 Matrix embed_plane_tensor(const Matrix& C2);
 
+/// The *DYNAMIC step of a deck: M ü + K u = f from rest (or with an initial velocity), the load
+/// switched on at t = 0 and held, by CalculiX's α-method with α = 0, i.e. Newmark's average
+/// acceleration: for a linear model the implicit midpoint rule of sim::TimeStepper.
+struct CalculixDynamics {
+    double dt = 0;        ///< time step (fixed: DIRECT)
+    int steps = 0;        ///< the step lasts steps * dt
+    int output_every = 1;  ///< *NODE PRINT every output_every increments
+    /// Lumped masses, one per DOF (equal over a node's components): written as one *MASS
+    /// element per node, the elements' densities then 1e-30 of theirs. Empty: the mass is
+    /// CalculiX's consistent mass of the elements' densities.
+    Vector lumped_mass;
+    Vector initial_velocity;  ///< one per DOF (*INITIAL CONDITIONS, TYPE=VELOCITY); empty: rest
+};
+
 /// Writes the static problem K u = f of an element model as a CalculiX deck:
 ///   *NODE, *ELEMENT (C3D4, C3D8; 2D: CPE3 / CPE4 for plane strain, CPS3 / CPS4 for plane
 ///   stress, thickness 1), one *MATERIAL (*ELASTIC, TYPE=ANISO and *DENSITY) and *SOLID SECTION
@@ -46,10 +61,14 @@ Matrix embed_plane_tensor(const Matrix& C2);
 /// model to 5e-14 relative. Written atomically.
 /// @param f   mesh.num_dofs() load (interleaved node DOFs)
 /// @param bc  prescribed DOFs of the mesh
-/// @throws Error naming the file if it cannot be written, or if f or bc do not fit the mesh
+/// With `dynamics`, the step is a *DYNAMIC, DIRECT one instead (CalculixDynamics), with the
+/// same load.
+/// @throws Error naming the file if it cannot be written, or if f, bc or the dynamics' vectors
+///         do not fit the mesh, or a node's lumped masses differ between its components
 void write_calculix_deck(const std::string& file, const mesh::Mesh& mesh,
                          const material::ElementMaterials& materials, const Vector& f,
                          const fem::Dirichlet& bc, material::PlaneMode plane,
-                         const std::string& heading);
+                         const std::string& heading,
+                         const std::optional<CalculixDynamics>& dynamics = {});
 
 }  // namespace coarsegrain::io
