@@ -126,6 +126,13 @@ int main(int argc, char** argv) {
                      "or all (default: the fine model alone)")
         ->check(CLI::Validator(check_methods, "METHOD[,METHOD...]|all"));
     simulate->add_option("--out", sim_out, "output folder")->capture_default_str();
+    std::string sim_export;
+    simulate
+        ->add_option("--export", sim_export,
+                     "inp: also write each coarse element model as a CalculiX / Abaqus deck with "
+                     "the run as a *DYNAMIC step, coarse_model.inp, and the hierarchy's matrices "
+                     "as Matrix Market files")
+        ->check(CLI::IsMember({"inp"}));
     simulate->footer(
         "Scene: \"dynamics\": {\"integrator\": \"midpoint\"|\"implicit_euler\", \"dt\", "
         "\"steps\",\n"
@@ -191,7 +198,8 @@ int main(int argc, char** argv) {
         } else if (*simulate) {
             const cg::scene::Scene sc = cg::scene::load_scene(sim_scene);
             const double read = since_start();
-            failed = cg::app::run_simulate(sc, optional_methods(sc, sim_methods), sim_out, read);
+            failed = cg::app::run_simulate(sc, optional_methods(sc, sim_methods), sim_out, read,
+                                           sim_export == "inp");
         } else if (*modes) {
             const cg::scene::Scene sc = cg::scene::load_scene(modes_scene);
             const double read = since_start();

@@ -11,6 +11,7 @@
 #include <functional>
 
 #include "animation.hpp"
+#include "export.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/assembly.hpp"
@@ -502,7 +503,7 @@ struct SimulateRun {
 /// `dir` (the ParaView series only if `series`).
 SimulateRun simulate_models(const scene::Scene& sc, FineDynamics& fine,
                             const std::vector<std::string>& methods, const CoarseSource& source,
-                            const fs::path& dir, bool series) {
+                            const fs::path& dir, bool series, bool export_inp = false) {
     const sim::DynamicsOptions& o = *sc.dynamics;
     const scene::FineModel& fm = fine.model;
     const int dim = fm.mesh.dim();
@@ -523,6 +524,10 @@ SimulateRun simulate_models(const scene::Scene& sc, FineDynamics& fine,
         entries.push_back(
             method_entry(method, methods.size(), dir, out.failed, [&](nlohmann::json& e) {
                 CoarseDynamics c = source(method);
+                if (export_inp) {
+                    fs::create_directories(dir / method);
+                    write_export(sc, fm, c.model, dir / method, &c.M);
+                }
                 nlohmann::json frames;
                 results[k] = run_coarse(sc, fine, ref, c, method, dir, frames);
                 nlohmann::json probes = nlohmann::json::array();
@@ -699,11 +704,12 @@ void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
 }
 
 int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods,
-                 const std::string& out_dir, double read_seconds) {
+                 const std::string& out_dir, double read_seconds, bool export_inp) {
     CG_VERIFY_AS(InvalidScene, sc.dynamics.has_value(),
                  "{}: simulate needs a \"dynamics\" block (at least \"dt\" and \"steps\"; "
                  "docs/guide.md, \"Dynamics\")",
                  sc.source);
+    if (export_inp) check_dynamic_export(sc);
     check_methods(sc, methods);
     const OutputFolder folder(out_dir);
     Timings timings;
@@ -712,7 +718,8 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
     FineDynamics fine = with_fine_mass(model, sc.dynamics->mass, std::move(timings));
     const SimulateRun run = simulate_models(
         sc, fine, methods,
-        [&](const std::string& method) { return build_coarse(sc, fine, method); }, out_dir, true);
+        [&](const std::string& method) { return build_coarse(sc, fine, method); }, out_dir, true,
+        export_inp);
     write_summary(out_dir, run.summary);
     print_simulate_table(sc, run.summary);
     std::printf("  wrote %s/fine.pvd, trajectory.csv, animation.gif and summary.json\n",

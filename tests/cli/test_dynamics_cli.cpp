@@ -339,3 +339,38 @@ TEST(CliSimulate, BadDynamicsFailsNamingTheKey) {
     j["coarse"] = {{"mass", "exact"}};
     expect_failure(j, "coarse.mass: unknown value \"exact\"");
 }
+
+// simulate --export inp: each element model's deck holds the run as a *DYNAMIC step with the
+// lumped coarse masses, and ccx steps it (tests/io checks its trajectory against coarsegrain's);
+// runs no deck states are refused before any work.
+TEST(CliSimulate, ExportInpWritesADynamicDeckThatCalculixRuns) {
+    const std::string dir = temp_dir("cli_simulate_export");
+    json j = with_dynamics(small_scene());
+    j["coarse"] = json::parse(R"({
+      "mesh": { "grid": { "min": [0,0,0], "max": [2,1,1], "cells": [2,1,1], "element": "tet" } }
+    })");
+    const Result r = cli("simulate " + write_scene(dir, j) +
+                         " --method effective-tensor --export inp --out " + dir + "/out");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string sub = dir + "/out/effective-tensor";
+    std::ifstream deck(sub + "/coarse_model.inp");
+    const std::string text((std::istreambuf_iterator<char>(deck)), {});
+    EXPECT_THAT(text, ::testing::HasSubstr("*DYNAMIC, DIRECT, ALPHA=0\n0.02, 0.8"));
+    EXPECT_THAT(text, ::testing::HasSubstr("*MASS, ELSET=MASS1"));
+    std::string output;
+    ASSERT_EQ(run("cd " + sub + " && ccx -i coarse_model", &output), 0) << output;
+    std::ifstream dat(sub + "/coarse_model.dat");
+    const std::string printed((std::istreambuf_iterator<char>(dat)), {});
+    std::size_t frames = 0;
+    for (std::size_t at = printed.find("displacements"); at != std::string::npos;
+         at = printed.find("displacements", at + 1))
+        ++frames;
+    EXPECT_EQ(frames, 10u);  // 40 steps, every 4th
+
+    j["kinematics"] = "corotational";
+    const Result corotated = cli("simulate " + write_scene(dir, j) +
+                                 " --method effective-tensor --export inp --out " + dir + "/cr");
+    EXPECT_NE(corotated.code, 0);
+    EXPECT_THAT(corotated.output, ::testing::HasSubstr("kinematics: --export inp writes linear"));
+    EXPECT_FALSE(std::filesystem::exists(dir + "/cr"));
+}
