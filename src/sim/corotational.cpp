@@ -5,6 +5,7 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 
 #include "coarsegrain/common/error.hpp"
@@ -65,18 +66,18 @@ class FactorizationPreconditioner {
 /// Newton's method for one Balance.
 class Newton {
   public:
-    /// @param rest  the factorization preconditioning every linear solve by Krylov iterations
-    ///              (LinearSolve::RestKrylov; kept by reference), or none: factorize each time
     Newton(const fem::CorotatedModel& model, const fem::Dirichlet& bc, const IndexVector& free,
-           const CorotationOptions& options, solve::SpdSolver& solver, Timings* timings,
-           const solve::SpdSolver* rest = nullptr)
+           const CorotationOptions& options, solve::SpdSolver& solver, Timings* timings)
         : m_model(model),
           m_bc(bc),
           m_free(free),
           m_options(options),
           m_solver(solver),
-          m_rest(rest),
           m_timings(timings) {}
+
+    /// The factorization preconditioning every linear solve by Krylov iterations from now on
+    /// (LinearSolve::RestKrylov; kept by reference), or none: factorize each time.
+    void set_rest(const solve::SpdSolver* rest) { m_rest = rest; }
 
     /// Newton's method for `balance` from u (updated in place), converged when the residual is
     /// at most tolerance times `reference`: first with full steps, watched (iterate), then, if
@@ -295,7 +296,7 @@ class Newton {
     const IndexVector& m_free;
     const CorotationOptions& m_options;
     solve::SpdSolver& m_solver;
-    const solve::SpdSolver* m_rest;
+    const solve::SpdSolver* m_rest = nullptr;
     solve::SparseLu m_lu;
     Timings* m_timings;
     const Balance* m_balance = nullptr;
@@ -397,15 +398,14 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
     return sol;
 }
 
-/// The coefficients of a time step's f_int(w) + A w = b, A = c_M M + c_C C, and the time h
-/// with w = u + h v at constant velocity.
+/// The coefficients of a time step of dt's f_int(w) + A w = b, A = c_M M + c_C C, and the time
+/// h with w = u + h v at constant velocity.
 struct StepCoefficients {
     double mass, damping, h;
 };
 
-StepCoefficients step_coefficients(const DynamicsOptions& o) {
-    const double dt = o.dt;
-    if (o.integrator == Integrator::Midpoint) return {4 / (dt * dt), 2 / dt, dt / 2};
+StepCoefficients step_coefficients(Integrator integrator, double dt) {
+    if (integrator == Integrator::Midpoint) return {4 / (dt * dt), 2 / dt, dt / 2};
     return {1 / (dt * dt), 1 / dt, dt};
 }
 
@@ -419,21 +419,26 @@ struct CorotatedStepper::Impl {
           dynamics(dynamics_),
           corotation(corotation_),
           free(fem::free_dofs(model_.num_dofs(), bc_)),
+          solver_options(solver_),
           solver(solver_),
-          rest(solver_),
-          newton(model, bc, free, corotation, solver, nullptr,
-                 corotation_.linear_solve == LinearSolve::RestKrylov ? &rest : nullptr) {
-        if (corotation.linear_solve == LinearSolve::RestKrylov) factorize_rest();
+          newton(model, bc, free, corotation, solver, nullptr) {
+        if (corotation.linear_solve == LinearSolve::RestKrylov) {
+            K = model.tangent(model.evaluate(Vector::Zero(model.num_dofs())));
+            rest(dynamics.dt);
+        }
     }
 
-    /// Factorizes the step matrix at rest on the free DOFs, K + c_M M + c_C (α M + β K) with K
-    /// the tangent at u = 0.
-    void factorize_rest() {
-        const StepCoefficients c = step_coefficients(dynamics);
-        const SparseMatrix K = model.tangent(model.evaluate(Vector::Zero(model.num_dofs())));
+    /// The factorization of the step matrix of a step of dt at rest on the free DOFs,
+    /// K + c_M M + c_C (α M + β K) with K the tangent at u = 0; factorized on first use.
+    const solve::SpdSolver& rest(double dt) {
+        auto it = rests.find(dt);
+        if (it != rests.end()) return it->second;
+        const StepCoefficients c = step_coefficients(dynamics.integrator, dt);
         const SparseMatrix T0 = (1 + c.damping * dynamics.rayleigh_stiffness) * K +
                                 (c.mass + c.damping * dynamics.rayleigh_mass) * M;
-        rest.factorize(fem::reduce(T0, Vector::Zero(T0.rows()), bc).K);
+        solve::SpdSolver factorization(solver_options);
+        factorization.factorize(fem::reduce(T0, Vector::Zero(T0.rows()), bc).K);
+        return rests.emplace(dt, std::move(factorization)).first->second;
     }
 
     const fem::CorotatedModel& model;
@@ -442,8 +447,11 @@ struct CorotatedStepper::Impl {
     DynamicsOptions dynamics;
     CorotationOptions corotation;
     IndexVector free;
+    solve::SolverOptions solver_options;
     solve::SpdSolver solver;
-    solve::SpdSolver rest;  ///< the step matrix at rest (LinearSolve::RestKrylov)
+    /// LinearSolve::RestKrylov: the stiffness at rest, and the step matrices at rest by step.
+    SparseMatrix K;
+    std::map<double, solve::SpdSolver> rests;
     Newton newton;
 };
 
@@ -475,8 +483,9 @@ NewtonReport CorotatedStepper::step(State& s, const Vector& f) {
     const double dt = o.dt;
     const bool midpoint = o.integrator == Integrator::Midpoint;
     // f_int(w) + A w = b with A = c_M M + c_C C and C = α M + β K_R (frames of the start).
-    const StepCoefficients c = step_coefficients(o);
+    const StepCoefficients c = step_coefficients(o.integrator, dt);
     const double cM = c.mass, cC = c.damping, h = c.h;
+    if (m.corotation.linear_solve == LinearSolve::RestKrylov) m.newton.set_rest(&m.rest(dt));
     const fem::CorotatedModel::State start = m.model.evaluate(s.u);
     SparseMatrix A = (cM + cC * o.rayleigh_mass) * m.M;
     Vector b = f + cM * (m.M * (s.u + h * s.v));

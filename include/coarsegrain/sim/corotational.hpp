@@ -68,10 +68,11 @@ enum class LinearSolve {
     /// Krylov iterations preconditioned by one factorization of the step matrix at rest,
     /// T_0 = K + A (K the linear stiffness, the tangent at u = 0; with stiffness damping A
     /// holds β K, the damping's value at rest, instead of the step's β K_R, which changes
-    /// every step), factorized once per stepper (at construction) by solver.backend on the
-    /// free DOFs. Conjugate gradients for the fixed frame (T symmetric positive definite: one
-    /// product with T and one back-substitution per iteration), Eigen's BiCGSTAB for the
-    /// consistent tangent (not symmetric: two of each per iteration). Each solve stops at the
+    /// every step), factorized by solver.backend on the free DOFs once per step length (the
+    /// stepper's dynamics.dt at construction). Conjugate gradients for the fixed frame (T
+    /// symmetric positive definite: one product with T and one back-substitution per
+    /// iteration), Eigen's BiCGSTAB for the consistent tangent (not symmetric: two of each per
+    /// iteration). Each solve stops at the
     /// relative residual |r - T d| <= η |r| of Eisenstat and Walker (1996, choice 2: η_k =
     /// 0.9 (|r_k| / |r_{k-1}|)², at most kMaxForcing, which is also η_0), but no tighter than
     /// half the Newton target over |r_k|: the inexact steps keep Newton's rate (|r_{k+1}| <=
