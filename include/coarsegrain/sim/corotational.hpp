@@ -189,7 +189,8 @@ class CorotatedStepper {
   public:
     /// @param model  kept by reference, as M: both must outlive the stepper
     /// @param M      model.num_dofs() square mass, symmetric positive definite on the free DOFs
-    /// @throws Error if sizes disagree or options are out of range
+    /// @throws Error if sizes disagree or options are out of range; with linear_solve
+    ///         rest_krylov, NotPositiveDefinite if the step matrix at rest is not
     CorotatedStepper(const fem::CorotatedModel& model, const SparseMatrix& M,
                      const fem::Dirichlet& bc, const DynamicsOptions& dynamics,
                      const CorotationOptions& corotation, const solve::SolverOptions& solver);
