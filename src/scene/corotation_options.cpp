@@ -8,7 +8,8 @@ namespace coarsegrain::scene {
 sim::CorotationOptions parse_corotation_options(const nlohmann::json& corotation,
                                                 const std::string& source) {
     const JsonReader r(corotation, "corotation", source);
-    r.allow_only({"frame", "tangent", "tolerance", "max_iterations", "max_bisections", "step"});
+    r.allow_only({"frame", "tangent", "tolerance", "max_iterations", "max_bisections", "step",
+                  "linear_solve"});
     sim::CorotationOptions o;
     if (auto v = r.find("frame"))
         o.frame = v->choice({"de_veubeke", "polar"}) == 0 ? fem::CorotationFrame::DeVeubeke
@@ -27,6 +28,10 @@ sim::CorotationOptions parse_corotation_options(const nlohmann::json& corotation
     if (auto v = r.find("step"))
         o.step = v->choice({"newton", "linearized"}) == 0 ? sim::StepIterations::Newton
                                                           : sim::StepIterations::Linearized;
+    if (auto v = r.find("linear_solve"))
+        o.linear_solve = v->choice({"factorize", "rest_krylov"}) == 0
+                             ? sim::LinearSolve::Factorize
+                             : sim::LinearSolve::RestKrylov;
     return o;
 }
 

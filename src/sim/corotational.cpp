@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 
 #include "coarsegrain/common/error.hpp"
@@ -34,6 +36,33 @@ struct Balance {
     double load_factor = 1;           ///< λ, for the history
 };
 
+/// Eigen's preconditioner interface around a factorization kept elsewhere (set() before the
+/// Krylov solver's compute): z = P⁻¹ r by one back-substitution.
+class FactorizationPreconditioner {
+  public:
+    void set(const solve::SpdSolver& factorization) { m_factorization = &factorization; }
+    template <typename MatrixType>
+    FactorizationPreconditioner& analyzePattern(const MatrixType&) {
+        return *this;
+    }
+    template <typename MatrixType>
+    FactorizationPreconditioner& factorize(const MatrixType&) {
+        return *this;
+    }
+    template <typename MatrixType>
+    FactorizationPreconditioner& compute(const MatrixType&) {
+        return *this;
+    }
+    template <typename Rhs>
+    Vector solve(const Rhs& r) const {
+        return m_factorization->solve(Vector(r));
+    }
+    Eigen::ComputationInfo info() const { return Eigen::Success; }
+
+  private:
+    const solve::SpdSolver* m_factorization = nullptr;
+};
+
 /// Newton's method for one Balance.
 class Newton {
   public:
@@ -45,6 +74,10 @@ class Newton {
           m_options(options),
           m_solver(solver),
           m_timings(timings) {}
+
+    /// The factorization preconditioning every linear solve by Krylov iterations from now on
+    /// (LinearSolve::RestKrylov; kept by reference), or none: factorize each time.
+    void set_rest(const solve::SpdSolver* rest) { m_rest = rest; }
 
     /// Newton's method for `balance` from u (updated in place), converged when the residual is
     /// at most tolerance times `reference`: first with full steps, watched (iterate), then, if
@@ -65,6 +98,7 @@ class Newton {
     void linearized(Vector& u, const Balance& balance, NewtonReport& report) {
         m_balance = &balance;
         m_report = &report;
+        m_forcing = m_options.tolerance;
         const fem::CorotatedModel::State state = evaluate(u);
         u(m_free) += newton_step(state, residual(state, u));
         ++report.iterations;
@@ -80,12 +114,14 @@ class Newton {
     bool iterate(Vector& u, bool line_search, int& budget) {
         fem::CorotatedModel::State state = evaluate(u);
         Vector r = residual(state, u);
+        m_previous_residual = 0;
         double watched_residual = r.norm(), watched_potential = potential(state, u);
         int unwatched = 0;
         for (; budget > 0; --budget) {
             if (converged(r, state)) return true;
             Vector d;
             try {
+                if (m_rest) m_forcing = forcing(r, state);
                 d = newton_step(state, r);
             } catch (const NotPositiveDefinite&) {
                 // The first tangent is (for zero prescribed values) the linear stiffness: the
@@ -153,18 +189,83 @@ class Newton {
         return 0;
     }
 
-    /// Whether the residual (free DOFs) at `state` meets the tolerance or the round-off floor.
-    bool converged(const Vector& r, const fem::CorotatedModel::State& state) const {
-        return r.norm() <=
-               std::max(m_options.tolerance * m_reference, kRoundOffFactor * state.round_off);
+    /// The residual norm at which Newton's method has converged at `state`: the tolerance or
+    /// the round-off floor.
+    double target(const fem::CorotatedModel::State& state) const {
+        return std::max(m_options.tolerance * m_reference, kRoundOffFactor * state.round_off);
     }
 
-    /// The Newton step T^{-1} r with the tangent at `state` (plus A) on the free DOFs.
+    /// Whether the residual (free DOFs) at `state` meets the tolerance or the round-off floor.
+    bool converged(const Vector& r, const fem::CorotatedModel::State& state) const {
+        return r.norm() <= target(state);
+    }
+
+    /// The relative residual of the next Krylov solve, for the Newton residual r: Eisenstat
+    /// and Walker's choice 2, η = 0.9 (|r| / |r_previous|)² at most kMaxForcing (and that
+    /// in the first iteration), at least half the Newton target over |r|.
+    double forcing(const Vector& r, const fem::CorotatedModel::State& state) {
+        const double norm = r.norm();
+        double eta = kMaxForcing;
+        if (m_previous_residual > 0)
+            eta = std::min(kMaxForcing, 0.9 * std::pow(norm / m_previous_residual, 2));
+        m_previous_residual = norm;
+        return std::max(eta, 0.5 * target(state) / norm);
+    }
+
+    /// Preconditioned conjugate gradients for T d = r (T symmetric positive definite) from
+    /// d = 0, each iteration one product with T and one back-substitution with the rest
+    /// factorization, to |r - T d| <= m_forcing |r|. Returns whether they converged within
+    /// kMaxKrylovIterations (a curvature pᵀT p <= 0, T not definite, stops them unconverged).
+    bool conjugate_gradients(const SparseMatrix& T, const Vector& r, Vector& d) {
+        const double target = m_forcing * r.norm();
+        d = Vector::Zero(r.size());
+        Vector residual = r, z = m_rest->solve(residual), p = z;
+        double rz = residual.dot(z);
+        for (int k = 1; k <= kMaxKrylovIterations; ++k) {
+            ++m_report->krylov_iterations;
+            const Vector q = T * p;
+            const double curvature = p.dot(q);
+            if (!(curvature > 0)) return false;
+            const double alpha = rz / curvature;
+            d += alpha * p;
+            residual -= alpha * q;
+            if (residual.norm() <= target) return d.allFinite();
+            z = m_rest->solve(residual);
+            const double rz_next = residual.dot(z);
+            p = z + (rz_next / rz) * p;
+            rz = rz_next;
+        }
+        return false;
+    }
+
+    /// Eigen's BiCGSTAB for T d = r (T not symmetric) from d = 0, preconditioned by the rest
+    /// factorization (two products with T and two back-substitutions per iteration), to
+    /// |r - T d| <= m_forcing |r|. Returns whether it converged within kMaxKrylovIterations.
+    bool bicgstab(const SparseMatrix& T, const Vector& r, Vector& d) {
+        Eigen::BiCGSTAB<SparseMatrix, FactorizationPreconditioner> krylov;
+        krylov.preconditioner().set(*m_rest);
+        krylov.setTolerance(m_forcing);
+        krylov.setMaxIterations(kMaxKrylovIterations);
+        krylov.compute(T);
+        d = krylov.solve(r);
+        m_report->krylov_iterations += static_cast<int>(krylov.iterations());
+        return krylov.info() == Eigen::Success && d.allFinite();
+    }
+
+    /// The Newton step T^{-1} r with the tangent at `state` (plus A) on the free DOFs: by
+    /// Krylov iterations when a rest factorization is set (falling back to a factorization
+    /// if they do not converge), else by a factorization.
     Vector newton_step(const fem::CorotatedModel::State& state, const Vector& r) {
         const bool consistent = m_options.tangent == Tangent::Consistent;
         SparseMatrix T = consistent ? m_model.jacobian(state) : m_model.tangent(state);
         if (m_balance->A) T += *m_balance->A;
         const fem::ReducedSystem sys = fem::reduce(T, Vector::Zero(T.rows()), m_bc);
+        if (m_rest) {
+            const Phase phase("krylov", m_timings);
+            Vector d;
+            if (consistent ? bicgstab(sys.K, r, d) : conjugate_gradients(sys.K, r, d)) return d;
+        }
+        ++m_report->factorizations;
         {
             const Phase phase("factorize", m_timings);
             if (consistent)
@@ -195,10 +296,13 @@ class Newton {
     const IndexVector& m_free;
     const CorotationOptions& m_options;
     solve::SpdSolver& m_solver;
+    const solve::SpdSolver* m_rest = nullptr;
     solve::SparseLu m_lu;
     Timings* m_timings;
     const Balance* m_balance = nullptr;
     double m_reference = 1;
+    double m_forcing = kMaxForcing;  ///< relative residual of the next Krylov solve
+    double m_previous_residual = 0;  ///< |r| of the previous iteration (0: none yet)
     NewtonReport* m_report = nullptr;
 };
 
@@ -219,6 +323,10 @@ std::string tangent_name(Tangent tangent) {
 
 std::string step_iterations_name(StepIterations iterations) {
     return iterations == StepIterations::Newton ? "newton" : "linearized";
+}
+
+std::string linear_solve_name(LinearSolve solve) {
+    return solve == LinearSolve::Factorize ? "factorize" : "rest_krylov";
 }
 
 std::string kinematics_name(Kinematics kinematics) {
@@ -290,6 +398,17 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
     return sol;
 }
 
+/// The coefficients of a time step of dt's f_int(w) + A w = b, A = c_M M + c_C C, and the time
+/// h with w = u + h v at constant velocity.
+struct StepCoefficients {
+    double mass, damping, h;
+};
+
+StepCoefficients step_coefficients(Integrator integrator, double dt) {
+    if (integrator == Integrator::Midpoint) return {4 / (dt * dt), 2 / dt, dt / 2};
+    return {1 / (dt * dt), 1 / dt, dt};
+}
+
 struct CorotatedStepper::Impl {
     Impl(const fem::CorotatedModel& model_, const SparseMatrix& M_, const fem::Dirichlet& bc_,
          const DynamicsOptions& dynamics_, const CorotationOptions& corotation_,
@@ -300,8 +419,27 @@ struct CorotatedStepper::Impl {
           dynamics(dynamics_),
           corotation(corotation_),
           free(fem::free_dofs(model_.num_dofs(), bc_)),
+          solver_options(solver_),
           solver(solver_),
-          newton(model, bc, free, corotation, solver, nullptr) {}
+          newton(model, bc, free, corotation, solver, nullptr) {
+        if (corotation.linear_solve == LinearSolve::RestKrylov) {
+            K = model.tangent(model.evaluate(Vector::Zero(model.num_dofs())));
+            rest(dynamics.dt);
+        }
+    }
+
+    /// The factorization of the step matrix of a step of dt at rest on the free DOFs,
+    /// K + c_M M + c_C (α M + β K) with K the tangent at u = 0; factorized on first use.
+    const solve::SpdSolver& rest(double dt) {
+        auto it = rests.find(dt);
+        if (it != rests.end()) return it->second;
+        const StepCoefficients c = step_coefficients(dynamics.integrator, dt);
+        const SparseMatrix T0 = (1 + c.damping * dynamics.rayleigh_stiffness) * K +
+                                (c.mass + c.damping * dynamics.rayleigh_mass) * M;
+        solve::SpdSolver factorization(solver_options);
+        factorization.factorize(fem::reduce(T0, Vector::Zero(T0.rows()), bc).K);
+        return rests.emplace(dt, std::move(factorization)).first->second;
+    }
 
     /// Advances s by dt: one step, or if its Newton solve fails, two of dt/2 (each halved
     /// again on failure, up to corotation.max_bisections times).
@@ -315,7 +453,11 @@ struct CorotatedStepper::Impl {
     DynamicsOptions dynamics;
     CorotationOptions corotation;
     IndexVector free;
+    solve::SolverOptions solver_options;
     solve::SpdSolver solver;
+    /// LinearSolve::RestKrylov: the stiffness at rest, and the step matrices at rest by step.
+    SparseMatrix K;
+    std::map<double, solve::SpdSolver> rests;
     Newton newton;
 };
 
@@ -374,8 +516,9 @@ bool CorotatedStepper::Impl::attempt(State& s, const Vector& f, double dt,
     const DynamicsOptions& o = dynamics;
     const bool midpoint = o.integrator == Integrator::Midpoint;
     // f_int(w) + A w = b with A = c_M M + c_C C and C = α M + β K_R (frames of the start).
-    const double cM = midpoint ? 4 / (dt * dt) : 1 / (dt * dt), cC = midpoint ? 2 / dt : 1 / dt;
-    const double h = midpoint ? dt / 2 : dt;  // w = u + h v at constant velocity
+    const StepCoefficients c = step_coefficients(o.integrator, dt);
+    const double cM = c.mass, cC = c.damping, h = c.h;
+    if (corotation.linear_solve == LinearSolve::RestKrylov) newton.set_rest(&rest(dt));
     const fem::CorotatedModel::State start = model.evaluate(s.u);
     SparseMatrix A = (cM + cC * o.rayleigh_mass) * M;
     Vector b = f + cM * (M * (s.u + h * s.v));

@@ -59,6 +59,44 @@ enum class StepIterations {
 /// "newton", "linearized".
 std::string step_iterations_name(StepIterations iterations);
 
+/// How a corotated time step solves the linear system of each Newton iteration,
+/// T d = r with T = J(w) + A (the tangent at w plus the step's c_M M + c_C C).
+enum class LinearSolve {
+    /// Factorize T at every iteration: UMFPACK's LU for the consistent tangent, the
+    /// solver.backend for the fixed frame (default).
+    Factorize,
+    /// Krylov iterations preconditioned by one factorization of the step matrix at rest,
+    /// T_0 = K + A (K the linear stiffness, the tangent at u = 0; with stiffness damping A
+    /// holds β K, the damping's value at rest, instead of the step's β K_R, which changes
+    /// every step), factorized by solver.backend on the free DOFs once per step length (the
+    /// stepper's dynamics.dt at construction). Conjugate gradients for the fixed frame (T
+    /// symmetric positive definite: one product with T and one back-substitution per
+    /// iteration), Eigen's BiCGSTAB for the consistent tangent (not symmetric: two of each per
+    /// iteration). Each solve stops at the
+    /// relative residual |r - T d| <= η |r| of Eisenstat and Walker (1996, choice 2: η_k =
+    /// 0.9 (|r_k| / |r_{k-1}|)², at most kMaxForcing, which is also η_0), but no tighter than
+    /// half the Newton target over |r_k|: the inexact steps keep Newton's rate (|r_{k+1}| <=
+    /// η_k |r_k| + O(|d|²)) and Newton still stops at CorotationOptions::tolerance, without
+    /// solving beyond what that needs. A linearized step solves to η = tolerance. A solve that
+    /// does not converge in kMaxKrylovIterations is discarded and T factorized instead.
+    /// T_0⁻¹ T is the identity at rest and drifts from it as the elements turn (R K Rᵀ
+    /// against K): the iterations grow with the rotation (docs/guide.md, "Large rotations").
+    /// Statics ignore it and factorize (their load increments leave the rest state behind).
+    RestKrylov,
+};
+
+/// "factorize", "rest_krylov".
+std::string linear_solve_name(LinearSolve solve);
+
+/// Krylov iterations per Newton iteration (LinearSolve::RestKrylov) before the iteration
+/// factorizes its matrix instead.
+constexpr int kMaxKrylovIterations = 100;
+/// The largest relative residual of a Krylov solve in a Newton iteration (LinearSolve::RestKrylov).
+/// On the accordion (bench/bench_corotated_dynamics.cpp, frames 16-18) caps of 0.5, 0.1 and 0.01
+/// took 5, 4 and 4 consistent Newton iterations per step and 6, 6 and 5 fixed-frame ones; the
+/// frame times differed by at most 10%.
+constexpr double kMaxForcing = 0.01;
+
 /// The scene's "corotation" block: the frame and the Newton solve.
 struct CorotationOptions {
     fem::CorotationFrame frame = fem::CorotationFrame::DeVeubeke;
@@ -75,6 +113,9 @@ struct CorotationOptions {
     int max_bisections = 10;
     /// The Newton iterations of a time step (CorotatedStepper; statics ignore it).
     StepIterations step = StepIterations::Newton;
+    /// The linear solves of a time step's Newton iterations (CorotatedStepper; statics
+    /// ignore it and factorize).
+    LinearSolve linear_solve = LinearSolve::Factorize;
 };
 
 /// One Newton iteration.
@@ -86,7 +127,12 @@ struct NewtonIteration {
 
 /// How a corotated solve went.
 struct NewtonReport {
-    int iterations = 0;  ///< Newton iterations (tangent factorizations), failed increments included
+    int iterations = 0;  ///< Newton iterations (linear solves), failed increments included
+    /// Krylov iterations in all (LinearSolve::RestKrylov; 0 when every iteration factorizes).
+    int krylov_iterations = 0;
+    /// Newton iterations that factorized their matrix: all with LinearSolve::Factorize, those
+    /// whose Krylov solve did not converge with RestKrylov.
+    int factorizations = 0;
     int increments = 0;  ///< load increments that converged (1 if the whole load converged)
     int bisections = 0;  ///< increments halved after failing
     double residual = 0;  ///< final relative residual
@@ -144,7 +190,8 @@ class CorotatedStepper {
   public:
     /// @param model  kept by reference, as M: both must outlive the stepper
     /// @param M      model.num_dofs() square mass, symmetric positive definite on the free DOFs
-    /// @throws Error if sizes disagree or options are out of range
+    /// @throws Error if sizes disagree or options are out of range; with linear_solve
+    ///         rest_krylov, NotPositiveDefinite if the step matrix at rest is not
     CorotatedStepper(const fem::CorotatedModel& model, const SparseMatrix& M,
                      const fem::Dirichlet& bc, const DynamicsOptions& dynamics,
                      const CorotationOptions& corotation, const solve::SolverOptions& solver);

@@ -1,0 +1,177 @@
+// Corotated time steps whose Newton systems are solved by Krylov iterations preconditioned by the
+// rest-state factorization (corotation.linear_solve "rest_krylov"): every step still reaches
+// corotation.tolerance, and the trajectory is the factorizing one's to the difference the
+// tolerance allows, with either tangent, with and without stiffness damping.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <cmath>
+#include <cstdio>
+
+#include "coarsegrain/fem/assembly.hpp"
+#include "coarsegrain/fem/loads.hpp"
+#include "coarsegrain/material/material_field.hpp"
+#include "coarsegrain/mesh/grid.hpp"
+#include "coarsegrain/sim/corotational.hpp"
+
+using namespace coarsegrain;
+
+namespace {
+
+/// A bar [0, 3] x [0, 1] (x [0, 1]) of `type` elements clamped at x = 0, of stiff dense (E = 50,
+/// density 4) and soft light (E = 2, density 0.5) layers across its axis, under gravity (0, -1):
+/// its tip swings down by about a third of its length within t = 1.
+struct KrylovBar {
+    mesh::Mesh mesh;
+    material::ElementMaterials mats;
+    SparseMatrix M;
+    Vector f;
+    fem::Dirichlet bc;
+};
+
+KrylovBar make_krylov_bar(mesh::ElementType type) {
+    const int dim = mesh::element_dim(type);
+    KrylovBar b;
+    b.mesh = dim == 2 ? mesh::make_grid(type, Eigen::Vector2d(0, 0), Eigen::Vector2d(3, 1),
+                                        Eigen::Vector2i(12, 4))
+                      : mesh::make_grid(type, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3, 1, 1),
+                                        Eigen::Vector3i(6, 2, 2));
+    material::layers(b.mesh, 0, 0.0, 0.5, {1, 2});
+    b.mats = material::assign(b.mesh, {{1, material::isotropic(dim, 50.0, 0.3, 4.0)},
+                                       {2, material::isotropic(dim, 2.0, 0.4, 0.5)}});
+    b.M = fem::mass_matrix(b.mesh, b.mats, fem::MassType::Consistent);
+    Eigen::VectorXd gravity = Eigen::VectorXd::Zero(dim);
+    gravity[1] = -1;
+    b.f = fem::gravity_load(b.mesh, b.mats, gravity);
+    std::vector<Index> clamped;
+    for (Index v = 0; v < b.mesh.num_nodes(); ++v)
+        if (b.mesh.rest_positions(v, 0) < 1e-9) clamped.push_back(v);
+    b.bc.fix_nodes(clamped, Eigen::VectorXd::Zero(dim));
+    return b;
+}
+
+struct KrylovCase {
+    mesh::ElementType type;
+    sim::Tangent tangent;
+    double rayleigh_stiffness;
+};
+
+class CorotatedKrylovTest : public ::testing::TestWithParam<KrylovCase> {};
+
+TEST_P(CorotatedKrylovTest, TrajectoryIsTheFactorizingOnesToTheTolerance) {
+    // Both steppers stop each step's Newton solve at a residual of at most the target t_k =
+    // max(tolerance ref_k, 4 round-off) (ref_k the step's force scale), so their solutions w of
+    // one step differ by δr with |δr| <= 2 t_k. A residual δr moves w by δw = T⁻¹ δr, and the
+    // state by δu = 2 δw, δv = 4 δw / dt (midpoint), whose energy ½ δvᵀM δv + ½ δuᵀK_R δu is
+    // 2 δwᵀT δw <= 2 |δr|² / λ_min(T), with T = K_R + (4/dt²) M (+ the damping) and λ_min(T) >=
+    // (4/dt²) μ, μ = λ_min(M) on the free DOFs. Midpoint keeps that energy of a perturbation
+    // (its linearization along the swing is conservative up to the damping, which only lowers
+    // it), so the velocities part by at most sqrt(2/μ) times the sum of the injected energies'
+    // square roots: |δv(t_N)| <= (2 dt / μ) Σ_k 2 t_k, and the displacements, the integrals of
+    // the velocities, by |δu(t_N)| <= t_N max_k |δv(t_k)|.
+    const KrylovCase c = GetParam();
+    const KrylovBar b = make_krylov_bar(c.type);
+    const fem::CorotatedModel model(b.mesh, b.mats, fem::Formulation::Standard,
+                                    fem::CorotationFrame::DeVeubeke);
+    sim::DynamicsOptions o;
+    o.dt = 0.05;
+    o.steps = 20;
+    o.output_every = 1;
+    o.rayleigh_stiffness = c.rayleigh_stiffness;
+    sim::CorotationOptions factorize;
+    factorize.tangent = c.tangent;
+    sim::CorotationOptions krylov = factorize;
+    krylov.linear_solve = sim::LinearSolve::RestKrylov;
+    sim::CorotatedStepper exact(model, b.M, b.bc, o, factorize, {});
+    sim::CorotatedStepper iterative(model, b.M, b.bc, o, krylov, {});
+
+    const Index n = b.mesh.num_dofs();
+    const IndexVector free = fem::free_dofs(n, b.bc);
+    const Matrix M_free = Matrix(b.M)(free, free);
+    const double mu = Eigen::SelfAdjointEigenSolver<Matrix>(M_free).eigenvalues()[0];
+    sim::State s{Vector::Zero(n), Vector::Zero(n)}, t = s;
+    double injected = 0, dv_bound = 0, dv_max = 0, du = 0, dv = 0;
+    int newton = 0, krylov_iterations = 0, newton_exact = 0;
+    for (int k = 0; k < o.steps; ++k) {
+        // The step's force scale at the start of the Krylov stepper's step (the two starts
+        // agree to far below it).
+        const fem::CorotatedModel::State start = model.evaluate(t.u);
+        const Vector r0 = b.f - start.force + 2 / o.dt * (b.M * t.v);
+        const double ref = std::max(Vector(r0(free)).norm(), Vector(start.force(free)).norm());
+        injected += 2 * std::max(factorize.tolerance * ref, 4 * start.round_off);
+
+        const sim::NewtonReport e = exact.step(s, b.f);
+        const sim::NewtonReport r = iterative.step(t, b.f);
+        EXPECT_LE(r.residual, krylov.tolerance) << "step " << k;
+        EXPECT_EQ(r.factorizations, 0) << "step " << k;
+        newton += r.iterations;
+        newton_exact += e.iterations;
+        krylov_iterations += r.krylov_iterations;
+        dv_bound = 2 * o.dt / mu * injected;
+        dv = (s.v - t.v).norm();
+        du = (s.u - t.u).norm();
+        dv_max = std::max(dv_max, dv_bound);
+        EXPECT_LE(dv, dv_bound) << "step " << k;
+        EXPECT_LE(du, (k + 1) * o.dt * dv_max) << "step " << k;
+    }
+    // The swing is large: the comparison is not made near rest.
+    EXPECT_GT(s.u.lpNorm<Eigen::Infinity>(), 0.3);
+    std::printf(
+        "  |du| %.2e (bound %.2e), |dv| %.2e (bound %.2e), |u| %.3f; Newton iterations "
+        "%d (factorizing: %d), Krylov iterations %d (%.1f per Newton iteration)\n",
+        du, o.steps * o.dt * dv_max, dv, dv_bound, s.u.norm(), newton, newton_exact,
+        krylov_iterations, static_cast<double>(krylov_iterations) / newton);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Tangents, CorotatedKrylovTest,
+    ::testing::Values(KrylovCase{mesh::ElementType::Quad4, sim::Tangent::FixedFrame, 0},
+                      KrylovCase{mesh::ElementType::Quad4, sim::Tangent::Consistent, 0},
+                      KrylovCase{mesh::ElementType::Quad4, sim::Tangent::Consistent, 0.01},
+                      KrylovCase{mesh::ElementType::Hex8, sim::Tangent::FixedFrame, 0.01},
+                      KrylovCase{mesh::ElementType::Hex8, sim::Tangent::Consistent, 0}),
+    [](const ::testing::TestParamInfo<KrylovCase>& p) {
+        return std::string(p.param.type == mesh::ElementType::Quad4 ? "Quad4" : "Hex8") +
+               (p.param.tangent == sim::Tangent::Consistent ? "Consistent" : "FixedFrame") +
+               (p.param.rayleigh_stiffness > 0 ? "Damped" : "");
+    });
+
+TEST(CorotatedKrylov, LinearizedStepSolvesToTheTolerance) {
+    // One linearized iteration solves T d = r (r the residual at the step's start) to the
+    // relative residual η = tolerance: d is the factorizing step's to |T⁻¹| η |r| <= η |r| /
+    // σ_min(T), and the state moves by 2 d (midpoint).
+    const KrylovBar b = make_krylov_bar(mesh::ElementType::Quad4);
+    const fem::CorotatedModel model(b.mesh, b.mats, fem::Formulation::Standard,
+                                    fem::CorotationFrame::DeVeubeke);
+    sim::DynamicsOptions o;
+    o.dt = 0.05;
+    o.steps = 1;
+    sim::CorotationOptions factorize;
+    factorize.step = sim::StepIterations::Linearized;
+    sim::CorotationOptions krylov = factorize;
+    krylov.linear_solve = sim::LinearSolve::RestKrylov;
+    sim::CorotatedStepper exact(model, b.M, b.bc, o, factorize, {});
+    sim::CorotatedStepper iterative(model, b.M, b.bc, o, krylov, {});
+    const Index n = b.mesh.num_dofs();
+    const IndexVector free = fem::free_dofs(n, b.bc);
+    sim::State s{Vector::Zero(n), Vector::Zero(n)};
+    for (int k = 0; k < 20; ++k) {
+        const sim::State before = s;
+        const fem::CorotatedModel::State start = model.evaluate(before.u);
+        const Vector r = b.f - start.force + 2 / o.dt * (b.M * before.v);
+        const SparseMatrix T = model.jacobian(start) + 4 / (o.dt * o.dt) * b.M;
+        const double sigma_min =
+            Eigen::JacobiSVD<Matrix>(Matrix(T)(free, free)).singularValues().minCoeff();
+        exact.step(s, b.f);
+        sim::State t = before;
+        const sim::NewtonReport report = iterative.step(t, b.f);
+        EXPECT_EQ(report.iterations, 1);
+        EXPECT_EQ(report.factorizations, 0);
+        EXPECT_LE((t.u - s.u).norm(), 2 * krylov.tolerance * Vector(r(free)).norm() / sigma_min)
+            << "step " << k;
+    }
+    EXPECT_GT(s.u.lpNorm<Eigen::Infinity>(), 0.3);
+}
+
+}  // namespace
