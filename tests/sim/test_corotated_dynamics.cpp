@@ -6,51 +6,15 @@
 
 #include <cmath>
 
-#include "coarsegrain/fem/assembly.hpp"
-#include "coarsegrain/fem/loads.hpp"
-#include "coarsegrain/material/material_field.hpp"
-#include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/sim/corotational.hpp"
+#include "sim/swinging_bar.hpp"
 #include "test_util.hpp"
 
 using namespace coarsegrain;
 
 namespace {
 
-/// A bar [0, 3] x [0, 1] (x [0, 1]) of `type` elements, clamped at x = 0, of stiff dense
-/// (E = 50, density 4) and soft light (E = 2, density 0.5) layers across its axis, under
-/// gravity (0, -g): g = 1 swings its tip by about a third of its length.
-struct SwingBar {
-    mesh::Mesh mesh;
-    material::ElementMaterials mats;
-    SparseMatrix K, M;
-    Vector f;
-    fem::Dirichlet bc;
-};
-
-SwingBar make_swing_bar(mesh::ElementType type, double g) {
-    const int dim = mesh::element_dim(type);
-    SwingBar b;
-    b.mesh = dim == 2 ? mesh::make_grid(type, Eigen::Vector2d(0, 0), Eigen::Vector2d(3, 1),
-                                        Eigen::Vector2i(12, 4))
-                      : mesh::make_grid(type, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3, 1, 1),
-                                        Eigen::Vector3i(6, 2, 2));
-    material::layers(b.mesh, 0, 0.0, 0.5, {1, 2});
-    b.mats = material::assign(b.mesh, {{1, material::isotropic(dim, 50.0, 0.3, 4.0)},
-                                       {2, material::isotropic(dim, 2.0, 0.4, 0.5)}});
-    b.K = fem::stiffness_matrix(b.mesh, b.mats);
-    b.M = fem::mass_matrix(b.mesh, b.mats, fem::MassType::Consistent);
-    Eigen::VectorXd gravity = Eigen::VectorXd::Zero(dim);
-    gravity[1] = -g;
-    b.f = fem::gravity_load(b.mesh, b.mats, gravity);
-    std::vector<Index> clamped;
-    for (Index v = 0; v < b.mesh.num_nodes(); ++v)
-        if (b.mesh.rest_positions(v, 0) < 1e-9) clamped.push_back(v);
-    b.bc.fix_nodes(clamped, Eigen::VectorXd::Zero(dim));
-    return b;
-}
-
-fem::CorotatedModel corotated_bar(const SwingBar& b) {
+fem::CorotatedModel corotated_bar(const test::SwingingBar& b) {
     return fem::CorotatedModel(b.mesh, b.mats, fem::Formulation::Standard,
                                fem::CorotationFrame::DeVeubeke);
 }
@@ -65,8 +29,8 @@ sim::DynamicsOptions step_options(sim::Integrator integrator, double dt, int ste
 }
 
 /// The corotated trajectory of the bar from rest under its load.
-sim::Trajectory swing(const SwingBar& b, const fem::CorotatedModel& model, const sim::DynamicsOptions& o,
-                      const sim::CorotationOptions& c = {}) {
+sim::Trajectory swing(const test::SwingingBar& b, const fem::CorotatedModel& model,
+                      const sim::DynamicsOptions& o, const sim::CorotationOptions& c = {}) {
     const auto [start, f] = sim::corotated_initial_state(model, b.f, b.bc, Vector(), o, c);
     return sim::simulate_corotated(model, b.M, b.bc, start, f, o, c);
 }
@@ -79,7 +43,7 @@ TEST_P(CorotatedDynamicsTest, EveryStepSatisfiesTheDiscreteEquations) {
     //   Euler:     M (v' - v)/dt + f_int(u') + C v' = f,                 u' = u + dt v'
     // with C = α M + β K_R(u), relative to the step's force scale max(|f - f_int(u) + c M v|,
     // |f_int(u)|) (c = 2/dt midpoint, 1/dt Euler: the residual at the step's start).
-    const SwingBar b = make_swing_bar(mesh::ElementType::Quad4, 1.0);
+    const test::SwingingBar b = test::make_swinging_bar(mesh::ElementType::Quad4, 1.0);
     const fem::CorotatedModel model = corotated_bar(b);
     sim::DynamicsOptions o = step_options(GetParam(), 0.05, 1);
     o.rayleigh_mass = 0.1;
@@ -95,16 +59,15 @@ TEST_P(CorotatedDynamicsTest, EveryStepSatisfiesTheDiscreteEquations) {
         const sim::State before = s;
         const sim::NewtonReport report = stepper.step(s, b.f);
         iterations = std::max(iterations, report.iterations);
-        const SparseMatrix C = o.rayleigh_mass * b.M +
-                               o.rayleigh_stiffness * model.tangent(model.evaluate(before.u));
+        const SparseMatrix C =
+            o.rayleigh_mass * b.M + o.rayleigh_stiffness * model.tangent(model.evaluate(before.u));
         const Vector w = midpoint ? Vector(0.5 * (before.u + s.u)) : s.u;
         const Vector v = midpoint ? Vector(0.5 * (before.v + s.v)) : s.v;
         const Vector inertia = b.M * (s.v - before.v) / o.dt;
         const Vector r = inertia + model.evaluate(w).force + C * v - b.f;
         const Vector f_start = model.evaluate(before.u).force;
         const Vector r_start = b.f - f_start + (midpoint ? 2 : 1) / o.dt * (b.M * before.v);
-        const double scale =
-            std::max(Vector(r_start(free)).norm(), Vector(f_start(free)).norm());
+        const double scale = std::max(Vector(r_start(free)).norm(), Vector(f_start(free)).norm());
         worst = std::max(worst, Vector(r(free)).norm() / scale);
         const Vector kinematic = s.u - before.u - o.dt * (midpoint ? v : s.v);
         EXPECT_LT(kinematic.norm(), 1e-12 * s.u.norm());
@@ -122,10 +85,11 @@ TEST_P(CorotatedDynamicsTest, ConvergesAtTheIntegratorsOrder) {
     // p = 2 for midpoint and 1 for implicit Euler. The bounds allow ±20% of 2^p for the next
     // order's term (the stiff layers' highest modes have ω dt ~ 0.4 at dt = 1/40; from 1/20
     // midpoint is not yet in its asymptotic range: 2.4).
-    const SwingBar b = make_swing_bar(mesh::ElementType::Quad4, 1.0);
+    const test::SwingingBar b = test::make_swinging_bar(mesh::ElementType::Quad4, 1.0);
     const fem::CorotatedModel model = corotated_bar(b);
     std::vector<Vector> u;
-    for (int k : {40, 80, 160}) u.push_back(swing(b, model, step_options(GetParam(), 1.0 / k, k)).u.back());
+    for (int k : {40, 80, 160})
+        u.push_back(swing(b, model, step_options(GetParam(), 1.0 / k, k)).u.back());
     const double ratio = (u[1] - u[0]).norm() / (u[2] - u[1]).norm();
     const double expected = GetParam() == sim::Integrator::Midpoint ? 4 : 2;
     EXPECT_GT(ratio, 0.8 * expected);
@@ -142,7 +106,7 @@ TEST_P(CorotatedDynamicsTest, SmallLoadsGiveTheLinearTrajectoryAtFirstOrder) {
     // CalculiX's dynamics; damping included, which rotates with the frames.
     double previous = 0;
     for (double g : {1e-2, 1e-3}) {
-        const SwingBar b = make_swing_bar(mesh::ElementType::Quad4, g);
+        const test::SwingingBar b = test::make_swinging_bar(mesh::ElementType::Quad4, g);
         const fem::CorotatedModel model = corotated_bar(b);
         sim::DynamicsOptions o = step_options(GetParam(), 0.05, 60);
         o.output_every = 1;
@@ -179,11 +143,11 @@ TEST_P(SpinningBodyTest, StaysRigidWhereTheLinearModelBalloons) {
     // linear, every node flies off along its initial velocity and the body grows by
     // sqrt(1 + π²) = 3.3 times.
     const int dim = mesh::element_dim(GetParam());
-    mesh::Mesh m = dim == 2 ? mesh::make_grid(GetParam(), Eigen::Vector2d(-0.5, -0.5),
-                                              Eigen::Vector2d(0.5, 0.5), Eigen::Vector2i(4, 4))
-                            : mesh::make_grid(GetParam(), Eigen::Vector3d(-0.5, -0.5, -0.5),
-                                              Eigen::Vector3d(0.5, 0.5, 0.5),
-                                              Eigen::Vector3i(3, 3, 3));
+    mesh::Mesh m = dim == 2
+                       ? mesh::make_grid(GetParam(), Eigen::Vector2d(-0.5, -0.5),
+                                         Eigen::Vector2d(0.5, 0.5), Eigen::Vector2i(4, 4))
+                       : mesh::make_grid(GetParam(), Eigen::Vector3d(-0.5, -0.5, -0.5),
+                                         Eigen::Vector3d(0.5, 0.5, 0.5), Eigen::Vector3i(3, 3, 3));
     const material::ElementMaterials mats =
         material::assign(m, {{0, material::isotropic(dim, 1000.0, 0.3, 1.0)}});
     const SparseMatrix K = fem::stiffness_matrix(m, mats);
@@ -221,8 +185,8 @@ TEST_P(SpinningBodyTest, StaysRigidWhereTheLinearModelBalloons) {
     // angle is π to 3%.
     EXPECT_NEAR(turn, M_PI, 0.03 * M_PI);
     std::printf("  %s: corotated stretch %.3e, linear %.3f; turned %.4f pi; energy drift %.2e\n",
-                mesh::element_name(GetParam()).c_str(), stretch(cr.u.back()),
-                stretch(lin.u.back()), turn / M_PI, cr.energy_drift());
+                mesh::element_name(GetParam()).c_str(), stretch(cr.u.back()), stretch(lin.u.back()),
+                turn / M_PI, cr.energy_drift());
 }
 
 INSTANTIATE_TEST_SUITE_P(Elements, SpinningBodyTest,
@@ -235,7 +199,7 @@ TEST(CorotatedEnergy, ImplicitEulerDissipatesAndMidpointDriftsLittle) {
     // (it would exactly for a potential force; the corotated force is W's gradient up to
     // O(|û|²), so allow that round-off in |û|), midpoint's drifts by a small fraction of the
     // largest kinetic energy.
-    const SwingBar b = make_swing_bar(mesh::ElementType::Quad4, 1.0);
+    const test::SwingingBar b = test::make_swinging_bar(mesh::ElementType::Quad4, 1.0);
     const fem::CorotatedModel model = corotated_bar(b);
     sim::DynamicsOptions o = step_options(sim::Integrator::ImplicitEuler, 0.02, 200);
     o.output_every = 1;
@@ -256,7 +220,7 @@ TEST(CorotatedLinearized, ApproachesNewtonAsTheStepShrinks) {
     // One linearized iteration leaves the force's remainder O(|Δu|²) = O(dt²), which the
     // inertia (1/dt²) turns into O(dt⁴) in u and O(dt³) in v per step: O(dt²) after a unit
     // time. Halving dt quarters the difference (±20% for higher-order terms).
-    const SwingBar b = make_swing_bar(mesh::ElementType::Quad4, 1.0);
+    const test::SwingingBar b = test::make_swinging_bar(mesh::ElementType::Quad4, 1.0);
     const fem::CorotatedModel model = corotated_bar(b);
     sim::CorotationOptions linearized;
     linearized.step = sim::StepIterations::Linearized;

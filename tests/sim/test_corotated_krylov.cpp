@@ -9,46 +9,22 @@
 #include <cmath>
 #include <cstdio>
 
-#include "coarsegrain/fem/assembly.hpp"
-#include "coarsegrain/fem/loads.hpp"
-#include "coarsegrain/material/material_field.hpp"
-#include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/sim/corotational.hpp"
+#include "sim/swinging_bar.hpp"
 
 using namespace coarsegrain;
 
 namespace {
 
-/// A bar [0, 3] x [0, 1] (x [0, 1]) of `type` elements clamped at x = 0, of stiff dense (E = 50,
-/// density 4) and soft light (E = 2, density 0.5) layers across its axis, under gravity (0, -1):
-/// its tip swings down by about a third of its length within t = 1.
-struct KrylovBar {
-    mesh::Mesh mesh;
-    material::ElementMaterials mats;
-    SparseMatrix M;
-    Vector f;
-    fem::Dirichlet bc;
-};
-
-KrylovBar make_krylov_bar(mesh::ElementType type) {
-    const int dim = mesh::element_dim(type);
-    KrylovBar b;
-    b.mesh = dim == 2 ? mesh::make_grid(type, Eigen::Vector2d(0, 0), Eigen::Vector2d(3, 1),
-                                        Eigen::Vector2i(12, 4))
-                      : mesh::make_grid(type, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3, 1, 1),
-                                        Eigen::Vector3i(6, 2, 2));
-    material::layers(b.mesh, 0, 0.0, 0.5, {1, 2});
-    b.mats = material::assign(b.mesh, {{1, material::isotropic(dim, 50.0, 0.3, 4.0)},
-                                       {2, material::isotropic(dim, 2.0, 0.4, 0.5)}});
-    b.M = fem::mass_matrix(b.mesh, b.mats, fem::MassType::Consistent);
-    Eigen::VectorXd gravity = Eigen::VectorXd::Zero(dim);
-    gravity[1] = -1;
-    b.f = fem::gravity_load(b.mesh, b.mats, gravity);
-    std::vector<Index> clamped;
-    for (Index v = 0; v < b.mesh.num_nodes(); ++v)
-        if (b.mesh.rest_positions(v, 0) < 1e-9) clamped.push_back(v);
-    b.bc.fix_nodes(clamped, Eigen::VectorXd::Zero(dim));
-    return b;
+/// The factorizing stepper of `factorize` and the one that solves its Newton systems by
+/// rest-preconditioned Krylov iterations instead.
+std::pair<sim::CorotatedStepper, sim::CorotatedStepper> stepper_pair(
+    const fem::CorotatedModel& model, const test::SwingingBar& b, const sim::DynamicsOptions& o,
+    const sim::CorotationOptions& factorize) {
+    sim::CorotationOptions krylov = factorize;
+    krylov.linear_solve = sim::LinearSolve::RestKrylov;
+    return {sim::CorotatedStepper(model, b.M, b.bc, o, factorize, {}),
+            sim::CorotatedStepper(model, b.M, b.bc, o, krylov, {})};
 }
 
 struct KrylovCase {
@@ -71,7 +47,7 @@ TEST_P(CorotatedKrylovTest, TrajectoryIsTheFactorizingOnesToTheTolerance) {
     // square roots: |δv(t_N)| <= (2 dt / μ) Σ_k 2 t_k, and the displacements, the integrals of
     // the velocities, by |δu(t_N)| <= t_N max_k |δv(t_k)|.
     const KrylovCase c = GetParam();
-    const KrylovBar b = make_krylov_bar(c.type);
+    const test::SwingingBar b = test::make_swinging_bar(c.type);
     const fem::CorotatedModel model(b.mesh, b.mats, fem::Formulation::Standard,
                                     fem::CorotationFrame::DeVeubeke);
     sim::DynamicsOptions o;
@@ -81,10 +57,7 @@ TEST_P(CorotatedKrylovTest, TrajectoryIsTheFactorizingOnesToTheTolerance) {
     o.rayleigh_stiffness = c.rayleigh_stiffness;
     sim::CorotationOptions factorize;
     factorize.tangent = c.tangent;
-    sim::CorotationOptions krylov = factorize;
-    krylov.linear_solve = sim::LinearSolve::RestKrylov;
-    sim::CorotatedStepper exact(model, b.M, b.bc, o, factorize, {});
-    sim::CorotatedStepper iterative(model, b.M, b.bc, o, krylov, {});
+    auto [exact, iterative] = stepper_pair(model, b, o, factorize);
 
     const Index n = b.mesh.num_dofs();
     const IndexVector free = fem::free_dofs(n, b.bc);
@@ -103,7 +76,7 @@ TEST_P(CorotatedKrylovTest, TrajectoryIsTheFactorizingOnesToTheTolerance) {
 
         const sim::NewtonReport e = exact.step(s, b.f);
         const sim::NewtonReport r = iterative.step(t, b.f);
-        EXPECT_LE(r.residual, krylov.tolerance) << "step " << k;
+        EXPECT_LE(r.residual, factorize.tolerance) << "step " << k;
         EXPECT_EQ(r.factorizations, 0) << "step " << k;
         newton += r.iterations;
         newton_exact += e.iterations;
@@ -141,7 +114,7 @@ TEST(CorotatedKrylov, LinearizedStepSolvesToTheTolerance) {
     // One linearized iteration solves T d = r (r the residual at the step's start) to the
     // relative residual η = tolerance: d is the factorizing step's to |T⁻¹| η |r| <= η |r| /
     // σ_min(T), and the state moves by 2 d (midpoint).
-    const KrylovBar b = make_krylov_bar(mesh::ElementType::Quad4);
+    const test::SwingingBar b = test::make_swinging_bar(mesh::ElementType::Quad4);
     const fem::CorotatedModel model(b.mesh, b.mats, fem::Formulation::Standard,
                                     fem::CorotationFrame::DeVeubeke);
     sim::DynamicsOptions o;
@@ -149,10 +122,7 @@ TEST(CorotatedKrylov, LinearizedStepSolvesToTheTolerance) {
     o.steps = 1;
     sim::CorotationOptions factorize;
     factorize.step = sim::StepIterations::Linearized;
-    sim::CorotationOptions krylov = factorize;
-    krylov.linear_solve = sim::LinearSolve::RestKrylov;
-    sim::CorotatedStepper exact(model, b.M, b.bc, o, factorize, {});
-    sim::CorotatedStepper iterative(model, b.M, b.bc, o, krylov, {});
+    auto [exact, iterative] = stepper_pair(model, b, o, factorize);
     const Index n = b.mesh.num_dofs();
     const IndexVector free = fem::free_dofs(n, b.bc);
     sim::State s{Vector::Zero(n), Vector::Zero(n)};
@@ -168,7 +138,7 @@ TEST(CorotatedKrylov, LinearizedStepSolvesToTheTolerance) {
         const sim::NewtonReport report = iterative.step(t, b.f);
         EXPECT_EQ(report.iterations, 1);
         EXPECT_EQ(report.factorizations, 0);
-        EXPECT_LE((t.u - s.u).norm(), 2 * krylov.tolerance * Vector(r(free)).norm() / sigma_min)
+        EXPECT_LE((t.u - s.u).norm(), 2 * factorize.tolerance * Vector(r(free)).norm() / sigma_min)
             << "step " << k;
     }
     EXPECT_GT(s.u.lpNorm<Eigen::Infinity>(), 0.3);
