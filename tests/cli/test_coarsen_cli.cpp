@@ -5,10 +5,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <unsupported/Eigen/SparseExtra>
 
 #include "cli/cli_test_util.hpp"
+#include "io/ccx_output.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/io/mesh_io.hpp"
@@ -417,17 +417,9 @@ TEST(CliCoarsen, ExportInpWritesDecksThatCalculixRuns) {
         ASSERT_TRUE(fs::exists(sub + "/coarse_model.inp")) << method;
         std::string output;
         ASSERT_EQ(run("cd " + sub + " && ccx -i coarse_model", &output), 0) << output;
-        std::ifstream dat(sub + "/coarse_model.dat");
-        std::string line;
-        while (std::getline(dat, line) && line.find("displacements") == std::string::npos) {
-        }
-        double largest = 0;
-        while (std::getline(dat, line)) {
-            std::istringstream s(line);
-            int node = 0;
-            double x = 0, y = 0, z = 0;
-            if (s >> node >> x >> y >> z) largest = std::max(largest, std::sqrt(x * x + y * y + z * z));
-        }
+        const std::vector<Matrix> blocks = read_ccx_displacements(sub + "/coarse_model.dat");
+        ASSERT_EQ(blocks.size(), 1u) << method;
+        const double largest = blocks[0].rowwise().norm().maxCoeff();
         const double expected = read_json(sub + "/summary.json")["max_displacement"].get<double>();
         EXPECT_NEAR(largest, expected, 2e-6 * expected) << method;
     }

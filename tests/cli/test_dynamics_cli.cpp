@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "cli/cli_test_util.hpp"
+#include "io/ccx_output.hpp"
 
 using namespace coarsegrain;
 using namespace coarsegrain::test;
@@ -359,13 +360,8 @@ TEST(CliSimulate, ExportInpWritesADynamicDeckThatCalculixRuns) {
     EXPECT_THAT(text, ::testing::HasSubstr("*MASS, ELSET=MASS1"));
     std::string output;
     ASSERT_EQ(run("cd " + sub + " && ccx -i coarse_model", &output), 0) << output;
-    std::ifstream dat(sub + "/coarse_model.dat");
-    const std::string printed((std::istreambuf_iterator<char>(dat)), {});
-    std::size_t frames = 0;
-    for (std::size_t at = printed.find("displacements"); at != std::string::npos;
-         at = printed.find("displacements", at + 1))
-        ++frames;
-    EXPECT_EQ(frames, 10u);  // 40 steps, every 4th
+    // 40 steps, every 4th
+    EXPECT_EQ(read_ccx_displacements(sub + "/coarse_model.dat").size(), 10u);
 
     j["kinematics"] = "corotational";
     const Result corotated = cli("simulate " + write_scene(dir, j) +

@@ -8,13 +8,13 @@
 #include <array>
 #include <cmath>
 #include <fstream>
-#include <sstream>
 
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/io/inp_export.hpp"
 #include "coarsegrain/scene/scene.hpp"
 #include "coarsegrain/sim/dynamics.hpp"
+#include "io/ccx_output.hpp"
 #include "test_util.hpp"
 
 using namespace coarsegrain;
@@ -90,23 +90,6 @@ TEST(CalculixAniso, ConstantsAreTheRotatedTensorsComponentsInCalculixOrder) {
     }
 }
 
-/// The nodal displacements ccx printed to <job>.dat (*NODE PRINT), dim per node.
-Vector read_ccx_displacements(const std::string& file, Index nodes, int dim) {
-    std::ifstream in(file);
-    std::string line;
-    while (std::getline(in, line) && line.find("displacements") == std::string::npos) {
-    }
-    Vector u = Vector::Constant(dim * nodes, std::nan(""));
-    while (std::getline(in, line)) {
-        std::istringstream s(line);
-        Index node = 0;
-        double c[3];
-        if (!(s >> node >> c[0] >> c[1] >> c[2])) continue;
-        for (int k = 0; k < dim; ++k) u[dim * (node - 1) + k] = c[k];
-    }
-    return u;
-}
-
 /// A bar of stiff and soft layers across its axis (contrast 100), clamped at x = 0 under
 /// gravity and an oblique load, with a coarse mesh of `coarse_element`s (2D: plane `plane`).
 nlohmann::json layered_bar(int dim, const std::string& plane) {
@@ -169,7 +152,10 @@ TEST_P(CalculixDeckTest, CcxReproducesTheCoarseSolution) {
                             c.name);
     std::string output;
     ASSERT_EQ(test::run(fmt::format("cd {} && ccx -i coarse", dir), &output), 0) << output;
-    const Vector u_ccx = read_ccx_displacements(dir + "/coarse.dat", e.mesh.num_nodes(), c.dim);
+    const std::vector<Matrix> blocks = test::read_ccx_displacements(dir + "/coarse.dat");
+    ASSERT_EQ(blocks.size(), 1u) << output;
+    const Vector u_ccx = test::interleaved(blocks[0], c.dim);
+    ASSERT_EQ(u_ccx.size(), u.size()) << output;
     ASSERT_TRUE(u_ccx.allFinite()) << "ccx printed no displacement for some node:\n" << output;
     const double rel = (u - u_ccx).cwiseAbs().maxCoeff() / u.cwiseAbs().maxCoeff();
     EXPECT_LT(rel, 1e-6);
@@ -190,26 +176,6 @@ INSTANTIATE_TEST_SUITE_P(Models, CalculixDeckTest,
 }  // namespace
 
 namespace {
-
-/// Every displacement block ccx printed to <job>.dat (*NODE PRINT every few increments), in
-/// time order.
-std::vector<Vector> read_ccx_frames(const std::string& file, Index nodes, int dim) {
-    std::ifstream in(file);
-    std::vector<Vector> frames;
-    std::string line;
-    while (std::getline(in, line)) {
-        if (line.find("displacements") != std::string::npos) {
-            frames.push_back(Vector::Constant(dim * nodes, std::nan("")));
-            continue;
-        }
-        std::istringstream s(line);
-        Index node = 0;
-        double c[3];
-        if (frames.empty() || !(s >> node >> c[0] >> c[1] >> c[2])) continue;
-        for (int k = 0; k < dim; ++k) frames.back()[dim * (node - 1) + k] = c[k];
-    }
-    return frames;
-}
 
 TEST(CalculixDynamicDeck, CcxReproducesTheCoarseTrajectory) {
     // The effective tensors' coarse bar released from rest under its load, 40 midpoint steps of
@@ -243,7 +209,9 @@ TEST(CalculixDynamicDeck, CcxReproducesTheCoarseTrajectory) {
                             "dynamic", d);
     std::string output;
     ASSERT_EQ(test::run(fmt::format("cd {} && ccx -i coarse", dir), &output), 0) << output;
-    const std::vector<Vector> frames = read_ccx_frames(dir + "/coarse.dat", e.mesh.num_nodes(), 3);
+    std::vector<Vector> frames;
+    for (const Matrix& block : test::read_ccx_displacements(dir + "/coarse.dat"))
+        frames.push_back(test::interleaved(block, 3));
     ASSERT_EQ(frames.size(), t.u.size() - 1) << output;  // t = 0 is not printed
     double largest = 0, worst = 0;
     for (const Vector& u : t.u) largest = std::max(largest, u.cwiseAbs().maxCoeff());
