@@ -79,40 +79,42 @@ class Newton {
     /// (LinearSolve::RestKrylov; kept by reference), or none: factorize each time.
     void set_rest(const solve::SpdSolver* rest) { m_rest = rest; }
 
-    /// Newton's method for `balance` from u (updated in place), converged when the residual is
-    /// at most tolerance times `reference`: first with full steps, watched (iterate), then, if
-    /// those stop making progress, again from u with the line search. Returns whether it
-    /// converged within max_iterations in all; the iterations go to `report`.
-    bool run(Vector& u, const Balance& balance, double reference, NewtonReport& report) {
+    /// Newton's method for `balance` from u (updated in place; `at_u` its state), converged
+    /// when the residual is at most tolerance times `reference`: first with full steps, watched
+    /// (iterate), then, if those stop making progress, again from u with the line search.
+    /// Returns whether it converged within max_iterations in all; the iterations go to `report`.
+    bool run(Vector& u, const fem::CorotatedModel::State& at_u, const Balance& balance,
+             double reference, NewtonReport& report) {
         m_balance = &balance;
         m_reference = reference;
         m_report = &report;
         const Vector start = u;
         int budget = m_options.max_iterations;
-        if (iterate(u, false, budget)) return true;
+        if (iterate(u, at_u, false, budget)) return true;
         u = start;
-        return budget > 0 && iterate(u, true, budget);
+        return budget > 0 && iterate(u, at_u, true, budget);
     }
 
-    /// One Newton iteration for `balance` from u (updated in place), a full step.
-    void linearized(Vector& u, const Balance& balance, NewtonReport& report) {
+    /// One Newton iteration for `balance` from u (updated in place; `at_u` its state), a full
+    /// step.
+    void linearized(Vector& u, const fem::CorotatedModel::State& at_u, const Balance& balance,
+                    NewtonReport& report) {
         m_balance = &balance;
         m_report = &report;
         m_forcing = m_options.tolerance;
-        const fem::CorotatedModel::State state = evaluate(u);
-        u(m_free) += newton_step(state, residual(state, u));
+        u(m_free) += newton_step(at_u, residual(at_u, u));
         ++report.iterations;
     }
 
-    /// Newton iterations from u, at most `budget` (decremented), with the line search or with
-    /// full steps under a watchdog: full steps may raise both merits for a while (the first
-    /// step from rest, the linear solution, stretches a stiff part's linearized rotation: on
-    /// the effective tensors' accordion it raised the residual 12,000 times and the potential
-    /// from 0 to 30, and the next three steps converged), but if kWatchdog steps in a row
+    /// Newton iterations from u (state `at_u`), at most `budget` (decremented), with the line
+    /// search or with full steps under a watchdog: full steps may raise both merits for a while
+    /// (the first step from rest, the linear solution, stretches a stiff part's linearized
+    /// rotation: on the effective tensors' accordion it raised the residual 12,000 times and the
+    /// potential from 0 to 30, and the next three steps converged), but if kWatchdog steps in a row
     /// lower neither the residual nor the potential below their values before them, the
     /// iteration stops. Returns whether it converged.
-    bool iterate(Vector& u, bool line_search, int& budget) {
-        fem::CorotatedModel::State state = evaluate(u);
+    bool iterate(Vector& u, const fem::CorotatedModel::State& at_u, bool line_search, int& budget) {
+        fem::CorotatedModel::State state = at_u;
         Vector r = residual(state, u);
         m_previous_residual = 0;
         double watched_residual = r.norm(), watched_potential = potential(state, u);
@@ -371,7 +373,7 @@ CorotatedSolution solve_corotated_static(const fem::CorotatedModel& model, const
         for (std::size_t i = 0; i < bc.dofs.size(); ++i)
             trial[bc.dofs[i]] = load_factor * bc.values[static_cast<Index>(i)];
         const Balance balance{load_factor * f, nullptr, load_factor};
-        if (newton.run(trial, balance, reference, sol.report)) {
+        if (newton.run(trial, newton.evaluate(trial), balance, reference, sol.report)) {
             u = std::move(trial);
             done = load_factor;
             ++sol.report.increments;
@@ -532,7 +534,7 @@ bool CorotatedStepper::Impl::attempt(State& s, const Vector& f, double dt,
 
     Vector w = s.u;
     if (corotation.step == StepIterations::Linearized) {
-        newton.linearized(w, balance, report);
+        newton.linearized(w, start, balance, report);
     } else {
         // The step's force scale: the residual at its start, dominated by the inertia 2 M v/dt
         // (Euler M v/dt) when the body moves, or the internal force when it rests.
@@ -540,7 +542,7 @@ bool CorotatedStepper::Impl::attempt(State& s, const Vector& f, double dt,
         const double reference =
             std::max(restrict(r0, free).norm(), restrict(start.force, free).norm());
         const std::size_t before = report.history.size();
-        if (!newton.run(w, balance, reference, report)) return false;
+        if (!newton.run(w, start, balance, reference, report)) return false;
         report.residual = std::max(
             report.residual, report.history.size() > before ? report.history.back().residual : 0.0);
     }
