@@ -7,6 +7,14 @@
 
 namespace coarsegrain::app {
 
+/// Files `coarsen` and `simulate` write on request (command-line options).
+struct Exports {
+    /// --export inp: each coarse model for other codes (write_export): DIR[/<method>]/
+    /// coarse_model.inp, an element model as a CalculiX / Abaqus deck; the hierarchy (mra*),
+    /// which is no element model, as Matrix Market files instead.
+    bool calculix = false;
+};
+
 /// Writes a coarse model for use elsewhere into `dir`:
 /// - an element model (effective tensors, baselines): coarse_model.inp, a CalculiX / Abaqus deck
 ///   (io::write_calculix_deck) with a *STATIC step, or with `mass` (a dynamic run's coarse mass)

@@ -199,7 +199,7 @@ int main(int argc, char** argv) {
             const cg::scene::Scene sc = cg::scene::load_scene(sim_scene);
             const double read = since_start();
             failed = cg::app::run_simulate(sc, optional_methods(sc, sim_methods), sim_out, read,
-                                           sim_export == "inp");
+                                           {sim_export == "inp"});
         } else if (*modes) {
             const cg::scene::Scene sc = cg::scene::load_scene(modes_scene);
             const double read = since_start();

@@ -3,17 +3,9 @@
 #include <vector>
 
 #include "coarsegrain/scene/scene.hpp"
+#include "export.hpp"
 
 namespace coarsegrain::app {
-
-/// Files `coarsen` writes on request (command-line options).
-struct Exports {
-    /// --export inp: DIR[/<method>]/coarse_model.inp, the coarse element model as a CalculiX /
-    /// Abaqus deck (io::write_calculix_deck); the hierarchy (mra*), which is no element model,
-    /// as Matrix Market files instead (coarse_K.mtx, coarse_M.mtx, coarse_f.mtx,
-    /// coarse_dirichlet.mtx if it has conditions, to_fine.mtx if the map is not too large).
-    bool calculix = false;
-};
 
 /// Solves the scene's static problem once on the fine model and once on the coarse model of each
 /// method, and compares them. Prints a table on stdout.

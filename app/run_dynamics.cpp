@@ -503,7 +503,7 @@ struct SimulateRun {
 /// `dir` (the ParaView series only if `series`).
 SimulateRun simulate_models(const scene::Scene& sc, FineDynamics& fine,
                             const std::vector<std::string>& methods, const CoarseSource& source,
-                            const fs::path& dir, bool series, bool export_inp = false) {
+                            const fs::path& dir, bool series, const Exports& exports = {}) {
     const sim::DynamicsOptions& o = *sc.dynamics;
     const scene::FineModel& fm = fine.model;
     const int dim = fm.mesh.dim();
@@ -524,7 +524,7 @@ SimulateRun simulate_models(const scene::Scene& sc, FineDynamics& fine,
         entries.push_back(
             method_entry(method, methods.size(), dir, out.failed, [&](nlohmann::json& e) {
                 CoarseDynamics c = source(method);
-                if (export_inp) {
+                if (exports.calculix) {
                     fs::create_directories(dir / method);
                     write_export(sc, fm, c.model, dir / method, &c.M);
                 }
@@ -704,12 +704,12 @@ void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
 }
 
 int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods,
-                 const std::string& out_dir, double read_seconds, bool export_inp) {
+                 const std::string& out_dir, double read_seconds, const Exports& exports) {
     CG_VERIFY_AS(InvalidScene, sc.dynamics.has_value(),
                  "{}: simulate needs a \"dynamics\" block (at least \"dt\" and \"steps\"; "
                  "docs/guide.md, \"Dynamics\")",
                  sc.source);
-    if (export_inp) check_dynamic_export(sc);
+    if (exports.calculix) check_dynamic_export(sc);
     check_methods(sc, methods);
     const OutputFolder folder(out_dir);
     Timings timings;
@@ -719,7 +719,7 @@ int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods
     const SimulateRun run = simulate_models(
         sc, fine, methods,
         [&](const std::string& method) { return build_coarse(sc, fine, method); }, out_dir, true,
-        export_inp);
+        exports);
     write_summary(out_dir, run.summary);
     print_simulate_table(sc, run.summary);
     std::printf("  wrote %s/fine.pvd, trajectory.csv, animation.gif and summary.json\n",

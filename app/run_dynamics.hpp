@@ -5,6 +5,7 @@
 
 #include "coarsegrain/coarsen/coarse_model.hpp"
 #include "coarsegrain/scene/scene.hpp"
+#include "export.hpp"
 
 namespace coarsegrain::app {
 
@@ -24,14 +25,14 @@ namespace coarsegrain::app {
 /// sim::compare_phase on its dominant component} and, with several methods, "methods": one such
 /// entry per method, named by "method". A method that fails is reported in its entry ("error")
 /// and the others still run.
-/// With `export_inp`, each method's folder also gets its coarse model for other codes
+/// With exports.calculix, each method's folder also gets its coarse model for other codes
 /// (write_export: a CalculiX deck with a *DYNAMIC step, or the hierarchy's matrices).
 /// @return the number of methods that failed
 /// @throws InvalidScene before any work if the scene has no "dynamics" block, or with
-///         `export_inp` a run no deck states (check_dynamic_export); Error if a method cannot
+///         exports.calculix a run no deck states (check_dynamic_export); Error if a method cannot
 ///         run on the scene (coarsen::validate_method) or the frames would not fit in memory
 int run_simulate(const scene::Scene& scene, const std::vector<std::string>& methods,
-                 const std::string& out_dir, double read_seconds, bool export_inp = false);
+                 const std::string& out_dir, double read_seconds, const Exports& exports = {});
 
 /// A coarse model built beforehand (by a static comparison) for the method named.
 struct BuiltModel {
