@@ -23,10 +23,11 @@ namespace fs = std::filesystem;
 constexpr double kMaxExportedMapEntries = 5e7;
 
 /// Writes a model that is no element model (the hierarchy) as Matrix Market files in `dir`:
-/// coarse_K.mtx, coarse_M.mtx (the coarse mass of the fine mass of the scene's "dynamics", or
-/// consistent), coarse_f.mtx, coarse_dirichlet.mtx (if it has conditions: rows of DOF, 1-based,
-/// and value) and to_fine.mtx (the coarse-to-fine map, formed column by column, unless it has
-/// more than kMaxExportedMapEntries entries: then a note on stderr).
+/// coarse_K.mtx, coarse_M.mtx (`mass`, a run's coarse mass, or the coarse mass of the fine mass
+/// of the scene's "dynamics", or consistent), coarse_f.mtx, coarse_dirichlet.mtx (if it has
+/// conditions: rows of DOF, 1-based, and value) and to_fine.mtx (the coarse-to-fine map, formed
+/// column by column, unless it has more than kMaxExportedMapEntries entries: then a note on
+/// stderr).
 void write_matrices(const scene::Scene& sc, const scene::FineModel& fine,
                     const coarsen::CoarseModel& coarse, const fs::path& dir,
                     const SparseMatrix* mass) {
@@ -35,13 +36,11 @@ void write_matrices(const scene::Scene& sc, const scene::FineModel& fine,
                             about + "\ncoarse stiffness K, coarse DOFs square");
     io::write_matrix_market((dir / "coarse_f.mtx").string(), Matrix(coarse.f),
                             about + "\ncoarse load f: K u = f");
-    if (mass) {
-        io::write_matrix_market((dir / "coarse_M.mtx").string(), *mass,
-                                about + "\ncoarse mass M, coarse DOFs square");
-    } else if (coarse.mass) {
+    if (mass || coarse.mass) {
         const fem::MassType type = sc.dynamics ? sc.dynamics->mass : fem::MassType::Consistent;
-        io::write_matrix_market((dir / "coarse_M.mtx").string(),
-                                coarse.mass(fem::mass_matrix(fine.mesh, fine.materials, type)),
+        const SparseMatrix M =
+            mass ? *mass : coarse.mass(fem::mass_matrix(fine.mesh, fine.materials, type));
+        io::write_matrix_market((dir / "coarse_M.mtx").string(), M,
                                 about + "\ncoarse mass M, coarse DOFs square");
     }
     if (!coarse.bc.dofs.empty()) {
