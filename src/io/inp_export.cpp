@@ -41,6 +41,77 @@ std::string element_type(mesh::ElementType type, material::PlaneMode plane) {
 /// (-1.234567890123e-45 is 19).
 std::string number(double x) { return fmt::format("{:.13g}", x); }
 
+/// *NODE (3 coordinates, 0 for z in 2D) and *ELEMENT, numbered from 1.
+void write_mesh(std::ostream& out, const mesh::Mesh& mesh, material::PlaneMode plane) {
+    out << "*NODE, NSET=NALL\n";
+    for (Index v = 0; v < mesh.num_nodes(); ++v) {
+        out << v + 1;
+        for (int k = 0; k < 3; ++k)
+            out << ", " << number(k < mesh.dim() ? mesh.rest_positions(v, k) : 0.0);
+        out << '\n';
+    }
+    out << "*ELEMENT, TYPE=" << element_type(mesh.type, plane) << ", ELSET=EALL\n";
+    for (Index e = 0; e < mesh.num_elements(); ++e) {
+        out << e + 1;
+        for (Index a = 0; a < mesh.elements.cols(); ++a) out << ", " << mesh.elements(e, a) + 1;
+        out << '\n';
+    }
+}
+
+/// One *ELSET, *MATERIAL (ANISO tensor, density; scaled by 1e-30 when `lumped` masses carry
+/// the inertia) and *SOLID SECTION per material table entry that elements use.
+void write_materials(std::ostream& out, const mesh::Mesh& mesh,
+                     const material::ElementMaterials& materials, bool lumped) {
+    std::vector<std::vector<Index>> members(materials.table.size());
+    for (Index e = 0; e < materials.size(); ++e)
+        members[static_cast<std::size_t>(materials.index[e])].push_back(e);
+    for (std::size_t m = 0; m < members.size(); ++m) {
+        if (members[m].empty()) continue;
+        out << fmt::format("*ELSET, ELSET=E{}\n", m + 1);
+        for (std::size_t i = 0; i < members[m].size(); ++i)
+            out << members[m][i] + 1 << (i % 16 == 15 || i + 1 == members[m].size() ? "\n" : ", ");
+        const material::Material& mat = materials.table[m];
+        const Matrix C =
+            mesh.dim() == 3 ? Matrix(mat.C) : embed_plane_tensor(material::tensor(mat, 2));
+        const std::array<double, 21> d = calculix_aniso(C);
+        out << fmt::format("*MATERIAL, NAME=M{}\n*ELASTIC, TYPE=ANISO\n", m + 1);
+        for (std::size_t k = 0; k < d.size(); ++k)
+            out << number(d[k]) << (k == 7 || k == 15 || k + 1 == d.size() ? "\n" : ", ");
+        out << "*DENSITY\n" << number(lumped ? 1e-30 * mat.density : mat.density) << '\n';
+        out << fmt::format("*SOLID SECTION, ELSET=E{}, MATERIAL=M{}\n", m + 1, m + 1);
+        if (mesh.dim() == 2) out << "1.\n";  // thickness
+    }
+}
+
+/// "node, component, value" for every nonzero entry of an interleaved DOF vector.
+void write_dof_values(std::ostream& out, const Vector& values, int dim) {
+    for (Index d = 0; d < values.size(); ++d)
+        if (values[d] != 0)
+            out << d / dim + 1 << ", " << d % dim + 1 << ", " << number(values[d]) << '\n';
+}
+
+/// *BOUNDARY: "node, first component, last component, value" per prescribed DOF.
+void write_boundary(std::ostream& out, const fem::Dirichlet& bc, int dim) {
+    if (bc.dofs.empty()) return;
+    out << "*BOUNDARY\n";
+    for (std::size_t i = 0; i < bc.dofs.size(); ++i) {
+        const Index d = bc.dofs[i];
+        const int component = static_cast<int>(d % dim) + 1;
+        out << d / dim + 1 << ", " << component << ", " << component << ", "
+            << number(bc.values[static_cast<Index>(i)]) << '\n';
+    }
+}
+
+/// One MASS element per node, numbered after the mesh's elements, with its lumped mass.
+void write_masses(std::ostream& out, const mesh::Mesh& mesh, const Vector& lumped_mass) {
+    out << "*ELEMENT, TYPE=MASS, ELSET=EMASS\n";
+    for (Index v = 0; v < mesh.num_nodes(); ++v)
+        out << mesh.num_elements() + v + 1 << ", " << v + 1 << '\n';
+    for (Index v = 0; v < mesh.num_nodes(); ++v)
+        out << fmt::format("*ELSET, ELSET=MASS{}\n{}\n*MASS, ELSET=MASS{}\n{}\n", v + 1,
+                           mesh.num_elements() + v + 1, v + 1, number(lumped_mass[mesh.dim() * v]));
+}
+
 }  // namespace
 
 std::array<double, 21> calculix_aniso(const Matrix& C_mandel) {
@@ -102,64 +173,14 @@ void write_calculix_deck(const std::string& file, const mesh::Mesh& mesh,
         }
     }
     write_atomically(file, [&](std::ostream& out) {
-        out << "*HEADING\n" << heading << "\n*NODE, NSET=NALL\n";
-        for (Index v = 0; v < mesh.num_nodes(); ++v) {
-            out << v + 1;
-            for (int k = 0; k < 3; ++k)
-                out << ", " << number(k < dim ? mesh.rest_positions(v, k) : 0.0);
-            out << '\n';
-        }
-        out << "*ELEMENT, TYPE=" << element_type(mesh.type, plane) << ", ELSET=EALL\n";
-        for (Index e = 0; e < mesh.num_elements(); ++e) {
-            out << e + 1;
-            for (Index a = 0; a < mesh.elements.cols(); ++a) out << ", " << mesh.elements(e, a) + 1;
-            out << '\n';
-        }
-        // One material and section per table entry that elements use.
-        std::vector<std::vector<Index>> members(materials.table.size());
-        for (Index e = 0; e < materials.size(); ++e)
-            members[static_cast<std::size_t>(materials.index[e])].push_back(e);
-        for (std::size_t m = 0; m < members.size(); ++m) {
-            if (members[m].empty()) continue;
-            out << fmt::format("*ELSET, ELSET=E{}\n", m + 1);
-            for (std::size_t i = 0; i < members[m].size(); ++i)
-                out << members[m][i] + 1
-                    << (i % 16 == 15 || i + 1 == members[m].size() ? "\n" : ", ");
-            const material::Material& mat = materials.table[m];
-            const Matrix C =
-                dim == 3 ? Matrix(mat.C) : embed_plane_tensor(material::tensor(mat, 2));
-            const std::array<double, 21> d = calculix_aniso(C);
-            out << fmt::format("*MATERIAL, NAME=M{}\n*ELASTIC, TYPE=ANISO\n", m + 1);
-            for (std::size_t k = 0; k < d.size(); ++k)
-                out << number(d[k]) << (k == 7 || k == 15 || k + 1 == d.size() ? "\n" : ", ");
-            out << "*DENSITY\n" << number(lumped ? 1e-30 * mat.density : mat.density) << '\n';
-            out << fmt::format("*SOLID SECTION, ELSET=E{}, MATERIAL=M{}\n", m + 1, m + 1);
-            if (dim == 2) out << "1.\n";  // thickness
-        }
-        if (!bc.dofs.empty()) {
-            out << "*BOUNDARY\n";
-            for (std::size_t i = 0; i < bc.dofs.size(); ++i) {
-                const Index d = bc.dofs[i];
-                const int component = static_cast<int>(d % dim) + 1;
-                out << d / dim + 1 << ", " << component << ", " << component << ", "
-                    << number(bc.values[static_cast<Index>(i)]) << '\n';
-            }
-        }
-        if (lumped) {
-            out << "*ELEMENT, TYPE=MASS, ELSET=EMASS\n";
-            for (Index v = 0; v < mesh.num_nodes(); ++v)
-                out << mesh.num_elements() + v + 1 << ", " << v + 1 << '\n';
-            for (Index v = 0; v < mesh.num_nodes(); ++v)
-                out << fmt::format("*ELSET, ELSET=MASS{}\n{}\n*MASS, ELSET=MASS{}\n{}\n", v + 1,
-                                   mesh.num_elements() + v + 1, v + 1,
-                                   number(dynamics->lumped_mass[dim * v]));
-        }
+        out << "*HEADING\n" << heading << '\n';
+        write_mesh(out, mesh, plane);
+        write_materials(out, mesh, materials, lumped);
+        write_boundary(out, bc, dim);
+        if (lumped) write_masses(out, mesh, dynamics->lumped_mass);
         if (dynamics && dynamics->initial_velocity.size() > 0) {
             out << "*INITIAL CONDITIONS, TYPE=VELOCITY\n";
-            for (Index d = 0; d < mesh.num_dofs(); ++d)
-                if (dynamics->initial_velocity[d] != 0)
-                    out << d / dim + 1 << ", " << d % dim + 1 << ", "
-                        << number(dynamics->initial_velocity[d]) << '\n';
+            write_dof_values(out, dynamics->initial_velocity, dim);
         }
         if (dynamics)
             out << fmt::format("*STEP, INC={}\n*DYNAMIC, DIRECT, ALPHA=0\n{}, {}\n",
@@ -167,18 +188,13 @@ void write_calculix_deck(const std::string& file, const mesh::Mesh& mesh,
                                number(dynamics->dt * dynamics->steps));
         else
             out << "*STEP\n*STATIC\n";
-        bool any_load = false;
-        for (Index d = 0; d < f.size(); ++d) {
-            if (f[d] == 0) continue;
-            if (!any_load) out << "*CLOAD\n";
-            any_load = true;
-            out << d / dim + 1 << ", " << d % dim + 1 << ", " << number(f[d]) << '\n';
+        if (!f.isZero()) {
+            out << "*CLOAD\n";
+            write_dof_values(out, f, dim);
         }
-        if (dynamics)
-            out << "*NODE PRINT, NSET=NALL, FREQUENCY=" << dynamics->output_every << "\nU\n";
-        else
-            out << "*NODE PRINT, NSET=NALL\nU\n";
-        out << "*END STEP\n";
+        out << "*NODE PRINT, NSET=NALL"
+            << (dynamics ? fmt::format(", FREQUENCY={}", dynamics->output_every) : "")
+            << "\nU\n*END STEP\n";
     });
 }
 
