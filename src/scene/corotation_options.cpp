@@ -28,10 +28,12 @@ sim::CorotationOptions parse_corotation_options(const nlohmann::json& corotation
     if (auto v = r.find("step"))
         o.step = v->choice({"newton", "linearized"}) == 0 ? sim::StepIterations::Newton
                                                           : sim::StepIterations::Linearized;
-    if (auto v = r.find("linear_solve"))
-        o.linear_solve = v->choice({"factorize", "rest_krylov"}) == 0
-                             ? sim::LinearSolve::Factorize
-                             : sim::LinearSolve::RestKrylov;
+    if (auto v = r.find("linear_solve")) {
+        constexpr sim::LinearSolve solves[] = {sim::LinearSolve::Factorize,
+                                               sim::LinearSolve::RestKrylov,
+                                               sim::LinearSolve::LaggedKrylov};
+        o.linear_solve = solves[v->choice({"factorize", "rest_krylov", "lagged_krylov"})];
+    }
     return o;
 }
 

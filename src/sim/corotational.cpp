@@ -5,6 +5,7 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 
@@ -36,11 +37,11 @@ struct Balance {
     double load_factor = 1;           ///< λ, for the history
 };
 
-/// Eigen's preconditioner interface around a factorization kept elsewhere (set() before the
-/// Krylov solver's compute): z = P⁻¹ r by one back-substitution.
+/// Eigen's preconditioner interface around a solve kept elsewhere (set() before the Krylov
+/// solver's compute): z = P⁻¹ r by one back-substitution with a factorization.
 class FactorizationPreconditioner {
   public:
-    void set(const solve::SpdSolver& factorization) { m_factorization = &factorization; }
+    void set(std::function<Vector(const Vector&)> solve) { m_solve = std::move(solve); }
     template <typename MatrixType>
     FactorizationPreconditioner& analyzePattern(const MatrixType&) {
         return *this;
@@ -55,12 +56,12 @@ class FactorizationPreconditioner {
     }
     template <typename Rhs>
     Vector solve(const Rhs& r) const {
-        return m_factorization->solve(Vector(r));
+        return m_solve(Vector(r));
     }
     Eigen::ComputationInfo info() const { return Eigen::Success; }
 
   private:
-    const solve::SpdSolver* m_factorization = nullptr;
+    std::function<Vector(const Vector&)> m_solve;
 };
 
 /// Newton's method for one Balance.
@@ -76,8 +77,12 @@ class Newton {
           m_timings(timings) {}
 
     /// The factorization preconditioning every linear solve by Krylov iterations from now on
-    /// (LinearSolve::RestKrylov; kept by reference), or none: factorize each time.
-    void set_rest(const solve::SpdSolver* rest) { m_rest = rest; }
+    /// (LinearSolve::RestKrylov; kept by reference).
+    void set_rest(const solve::SpdSolver& rest) { m_rest = &rest; }
+
+    /// From now on, precondition every linear solve's Krylov iterations by the latest
+    /// factorization this Newton made (LinearSolve::LaggedKrylov).
+    void set_lagged() { m_lagged = true; }
 
     /// Newton's method for `balance` from u (updated in place; `at_u` its state), converged
     /// when the residual is at most tolerance times `reference`: first with full steps, watched
@@ -123,7 +128,7 @@ class Newton {
             if (converged(r, state)) return true;
             Vector d;
             try {
-                if (m_rest) m_forcing = forcing(r, state);
+                if (krylov()) m_forcing = forcing(r, state);
                 d = newton_step(state, r);
             } catch (const NotPositiveDefinite&) {
                 // The first tangent is (for zero prescribed values) the linear stiffness: the
@@ -152,8 +157,7 @@ class Newton {
                     return false;
                 }
             }
-            m_report->history.push_back(
-                {m_balance->load_factor, r.norm() / m_reference, step});
+            m_report->history.push_back({m_balance->load_factor, r.norm() / m_reference, step});
         }
         return converged(r, state);
     }
@@ -214,16 +218,27 @@ class Newton {
         return std::max(eta, 0.5 * target(state) / norm);
     }
 
+    /// Whether the next linear solve starts with Krylov iterations: with a rest factorization,
+    /// or lagged once a factorization exists.
+    bool krylov() const { return m_rest || (m_lagged && m_factorized); }
+
+    /// z = P⁻¹ r with the Krylov preconditioner: the rest factorization, or the latest one.
+    Vector precondition(const Vector& r) const {
+        if (m_rest) return m_rest->solve(r);
+        return m_options.tangent == Tangent::Consistent ? m_lu.solve(r) : m_solver.solve(r);
+    }
+
     /// Preconditioned conjugate gradients for T d = r (T symmetric positive definite) from
-    /// d = 0, each iteration one product with T and one back-substitution with the rest
-    /// factorization, to |r - T d| <= m_forcing |r|. Returns whether they converged within
-    /// kMaxKrylovIterations (a curvature pᵀT p <= 0, T not definite, stops them unconverged).
-    bool conjugate_gradients(const SparseMatrix& T, const Vector& r, Vector& d) {
+    /// d = 0, each iteration one product with T and one back-substitution (precondition), to
+    /// |r - T d| <= m_forcing |r|. Returns whether they converged within `max_iterations` (a
+    /// curvature pᵀT p <= 0, T not definite, stops them unconverged).
+    bool conjugate_gradients(const SparseMatrix& T, const Vector& r, int max_iterations,
+                             Vector& d) {
         const double target = m_forcing * r.norm();
         d = Vector::Zero(r.size());
-        Vector residual = r, z = m_rest->solve(residual), p = z;
+        Vector residual = r, z = precondition(residual), p = z;
         double rz = residual.dot(z);
-        for (int k = 1; k <= kMaxKrylovIterations; ++k) {
+        for (int k = 1; k <= max_iterations; ++k) {
             ++m_report->krylov_iterations;
             const Vector q = T * p;
             const double curvature = p.dot(q);
@@ -232,7 +247,7 @@ class Newton {
             d += alpha * p;
             residual -= alpha * q;
             if (residual.norm() <= target) return d.allFinite();
-            z = m_rest->solve(residual);
+            z = precondition(residual);
             const double rz_next = residual.dot(z);
             p = z + (rz_next / rz) * p;
             rz = rz_next;
@@ -240,14 +255,14 @@ class Newton {
         return false;
     }
 
-    /// Eigen's BiCGSTAB for T d = r (T not symmetric) from d = 0, preconditioned by the rest
-    /// factorization (two products with T and two back-substitutions per iteration), to
-    /// |r - T d| <= m_forcing |r|. Returns whether it converged within kMaxKrylovIterations.
-    bool bicgstab(const SparseMatrix& T, const Vector& r, Vector& d) {
+    /// Eigen's BiCGSTAB for T d = r (T not symmetric) from d = 0, preconditioned by
+    /// `precondition` (two products with T and two back-substitutions per iteration), to
+    /// |r - T d| <= m_forcing |r|. Returns whether it converged within `max_iterations`.
+    bool bicgstab(const SparseMatrix& T, const Vector& r, int max_iterations, Vector& d) {
         Eigen::BiCGSTAB<SparseMatrix, FactorizationPreconditioner> krylov;
-        krylov.preconditioner().set(*m_rest);
+        krylov.preconditioner().set([this](const Vector& x) { return precondition(x); });
         krylov.setTolerance(m_forcing);
-        krylov.setMaxIterations(kMaxKrylovIterations);
+        krylov.setMaxIterations(max_iterations);
         krylov.compute(T);
         d = krylov.solve(r);
         m_report->krylov_iterations += static_cast<int>(krylov.iterations());
@@ -255,25 +270,29 @@ class Newton {
     }
 
     /// The Newton step T^{-1} r with the tangent at `state` (plus A) on the free DOFs: by
-    /// Krylov iterations when a rest factorization is set (falling back to a factorization
-    /// if they do not converge), else by a factorization.
+    /// Krylov iterations when a preconditioner is set (krylov(); falling back to a
+    /// factorization if they do not converge), else by a factorization.
     Vector newton_step(const fem::CorotatedModel::State& state, const Vector& r) {
         const bool consistent = m_options.tangent == Tangent::Consistent;
         SparseMatrix T = consistent ? m_model.jacobian(state) : m_model.tangent(state);
         if (m_balance->A) T += *m_balance->A;
         const fem::ReducedSystem sys = fem::reduce(T, Vector::Zero(T.rows()), m_bc);
-        if (m_rest) {
+        if (krylov()) {
             const Phase phase("krylov", m_timings);
+            const int cap = m_rest ? kMaxKrylovIterations : kLaggedKrylovIterations;
             Vector d;
-            if (consistent ? bicgstab(sys.K, r, d) : conjugate_gradients(sys.K, r, d)) return d;
+            if (consistent ? bicgstab(sys.K, r, cap, d) : conjugate_gradients(sys.K, r, cap, d))
+                return d;
         }
         ++m_report->factorizations;
         {
             const Phase phase("factorize", m_timings);
+            m_factorized = false;
             if (consistent)
                 m_lu.factorize(sys.K);
             else
                 m_solver.factorize(sys.K);
+            m_factorized = true;
         }
         const Phase phase("solve", m_timings);
         return consistent ? m_lu.solve(r) : m_solver.solve(r);
@@ -299,6 +318,8 @@ class Newton {
     const CorotationOptions& m_options;
     solve::SpdSolver& m_solver;
     const solve::SpdSolver* m_rest = nullptr;
+    bool m_lagged = false;      ///< LinearSolve::LaggedKrylov
+    bool m_factorized = false;  ///< whether m_lu or m_solver holds a factorization
     solve::SparseLu m_lu;
     Timings* m_timings;
     const Balance* m_balance = nullptr;
@@ -328,7 +349,15 @@ std::string step_iterations_name(StepIterations iterations) {
 }
 
 std::string linear_solve_name(LinearSolve solve) {
-    return solve == LinearSolve::Factorize ? "factorize" : "rest_krylov";
+    switch (solve) {
+        case LinearSolve::Factorize:
+            return "factorize";
+        case LinearSolve::RestKrylov:
+            return "rest_krylov";
+        case LinearSolve::LaggedKrylov:
+            return "lagged_krylov";
+    }
+    return "";
 }
 
 std::string kinematics_name(Kinematics kinematics) {
@@ -428,6 +457,7 @@ struct CorotatedStepper::Impl {
             K = model.tangent(model.evaluate(Vector::Zero(model.num_dofs())));
             rest(dynamics.dt);
         }
+        if (corotation.linear_solve == LinearSolve::LaggedKrylov) newton.set_lagged();
     }
 
     /// The factorization of the step matrix of a step of dt at rest on the free DOFs,
@@ -506,21 +536,19 @@ void CorotatedStepper::Impl::advance(State& s, const Vector& f, double dt, int d
             "corotation.tolerance {:g}); reduce dynamics.dt or raise corotation.max_iterations "
             "/ max_bisections",
             dt, depth, report.iterations,
-            report.history.empty() ? 1.0 : report.history.back().residual,
-            corotation.tolerance));
+            report.history.empty() ? 1.0 : report.history.back().residual, corotation.tolerance));
     ++report.bisections;
     advance(s, f, dt / 2, depth + 1, report);
     advance(s, f, dt / 2, depth + 1, report);
 }
 
-bool CorotatedStepper::Impl::attempt(State& s, const Vector& f, double dt,
-                                     NewtonReport& report) {
+bool CorotatedStepper::Impl::attempt(State& s, const Vector& f, double dt, NewtonReport& report) {
     const DynamicsOptions& o = dynamics;
     const bool midpoint = o.integrator == Integrator::Midpoint;
     // f_int(w) + A w = b with A = c_M M + c_C C and C = α M + β K_R (frames of the start).
     const StepCoefficients c = step_coefficients(o.integrator, dt);
     const double cM = c.mass, cC = c.damping, h = c.h;
-    if (corotation.linear_solve == LinearSolve::RestKrylov) newton.set_rest(&rest(dt));
+    if (corotation.linear_solve == LinearSolve::RestKrylov) newton.set_rest(rest(dt));
     const fem::CorotatedModel::State start = model.evaluate(s.u);
     SparseMatrix A = (cM + cC * o.rayleigh_mass) * M;
     Vector b = f + cM * (M * (s.u + h * s.v));
@@ -586,8 +614,8 @@ Trajectory simulate_corotated(const fem::CorotatedModel& model, const SparseMatr
             try {
                 return stepper.step(s, f).iterations;
             } catch (const NewtonFailed& e) {
-                throw NewtonFailed(fmt::format("step {} (t = {:g}): {}", k, k * dynamics.dt,
-                                               e.what()));
+                throw NewtonFailed(
+                    fmt::format("step {} (t = {:g}): {}", k, k * dynamics.dt, e.what()));
             }
         },
         [&](const State& s) { return stepper.energy(s, f); }, name);

@@ -11,8 +11,8 @@ namespace {
 TEST(CorotationOptions, LinearSolveNamesTheKrylovOption) {
     EXPECT_EQ(scene::parse_corotation_options(nlohmann::json::object(), "s.json").linear_solve,
               sim::LinearSolve::Factorize);
-    for (const sim::LinearSolve solve :
-         {sim::LinearSolve::Factorize, sim::LinearSolve::RestKrylov}) {
+    for (const sim::LinearSolve solve : {sim::LinearSolve::Factorize, sim::LinearSolve::RestKrylov,
+                                         sim::LinearSolve::LaggedKrylov}) {
         const nlohmann::json j = {{"linear_solve", sim::linear_solve_name(solve)}};
         EXPECT_EQ(scene::parse_corotation_options(j, "s.json").linear_solve, solve);
     }
@@ -24,7 +24,7 @@ TEST(CorotationOptions, BadLinearSolveIsRejectedNamingTheKey) {
             scene::parse_corotation_options({{"linear_solve", "pcg"}}, "s.json");
         },
         "s.json: corotation.linear_solve: unknown value \"pcg\"; expected one of "
-        "\"factorize\", \"rest_krylov\"");
+        "\"factorize\", \"rest_krylov\", \"lagged_krylov\"");
     test::expect_error(
         [] {
             scene::parse_corotation_options({{"linear_solve", 1}}, "s.json");

@@ -83,14 +83,28 @@ enum class LinearSolve {
     /// against K): the iterations grow with the rotation (docs/guide.md, "Large rotations").
     /// Statics ignore it and factorize (their load increments leave the rest state behind).
     RestKrylov,
+    /// Krylov iterations (as RestKrylov: conjugate gradients for the fixed frame, BiCGSTAB for
+    /// the consistent tangent, to the Eisenstat–Walker residual) preconditioned by the latest
+    /// factorization of T, which the stepper keeps across iterations and steps: a lagged
+    /// Jacobian (the chord method) whose error the Krylov iterations correct, so that Newton
+    /// keeps its rate. The first iteration of a run factorizes T; a solve that does not
+    /// converge within kLaggedKrylovIterations is discarded and T factorized instead, the new
+    /// factorization preconditioning the solves that follow. Where RestKrylov's preconditioner
+    /// drifts from T as the elements turn, this one is refreshed by the turning itself; it
+    /// suits models whose factorization costs a few Krylov iterations at most (the coarse
+    /// models), where RestKrylov's fallbacks would factorize every iteration anyway.
+    LaggedKrylov,
 };
 
-/// "factorize", "rest_krylov".
+/// "factorize", "rest_krylov", "lagged_krylov".
 std::string linear_solve_name(LinearSolve solve);
 
 /// Krylov iterations per Newton iteration (LinearSolve::RestKrylov) before the iteration
 /// factorizes its matrix instead.
 constexpr int kMaxKrylovIterations = 100;
+/// Krylov iterations per Newton iteration (LinearSolve::LaggedKrylov) before the iteration
+/// factorizes its matrix instead, which then preconditions the solves that follow.
+constexpr int kLaggedKrylovIterations = 10;
 /// The largest relative residual of a Krylov solve in a Newton iteration (LinearSolve::RestKrylov).
 /// On the accordion (bench/bench_corotated_dynamics.cpp, frames 16-18) caps of 0.5, 0.1 and 0.01
 /// took 5, 4 and 4 consistent Newton iterations per step and 6, 6 and 5 fixed-frame ones; the
@@ -114,7 +128,7 @@ struct CorotationOptions {
     /// The Newton iterations of a time step (CorotatedStepper; statics ignore it).
     StepIterations step = StepIterations::Newton;
     /// The linear solves of a time step's Newton iterations (CorotatedStepper; statics
-    /// ignore it and factorize).
+    /// ignore it and factorize every iteration).
     LinearSolve linear_solve = LinearSolve::Factorize;
 };
 
@@ -133,8 +147,8 @@ struct NewtonReport {
     /// Newton iterations that factorized their matrix: all with LinearSolve::Factorize, those
     /// whose Krylov solve did not converge with RestKrylov.
     int factorizations = 0;
-    int increments = 0;  ///< load increments that converged (1 if the whole load converged)
-    int bisections = 0;  ///< increments halved after failing
+    int increments = 0;   ///< load increments that converged (1 if the whole load converged)
+    int bisections = 0;   ///< increments halved after failing
     double residual = 0;  ///< final relative residual
     /// The residual the force's round-off allows, relative as `residual`: 4 ε-scaled force
     /// magnitudes (CorotationOptions::tolerance).

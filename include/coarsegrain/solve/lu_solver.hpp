@@ -16,7 +16,9 @@ class SingularMatrix : public Error {
 /// A sparse LU factorization by UMFPACK (SuiteSparse, through Eigen's UmfPackSupport), for
 /// matrices that are not symmetric (the consistent corotated tangent): factorize, then solve
 /// many right-hand sides. The symbolic analysis is kept while the pattern stays the same
-/// (compared by size, nonzero count and indices), as in Newton's iterations.
+/// (compared by size, nonzero count and indices), as in Newton's iterations. The solves skip
+/// UMFPACK's iterative refinement: x is as accurate as the factorization's backward error
+/// allows (what a Newton step or a preconditioner needs), not refined towards round-off.
 /// Not thread-safe: one solve at a time.
 class SparseLu {
   public:
