@@ -11,7 +11,6 @@
 #include <functional>
 
 #include "animation.hpp"
-#include "export.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/assembly.hpp"
@@ -22,6 +21,7 @@
 #include "coarsegrain/sim/dynamics.hpp"
 #include "coarsegrain/sim/modes.hpp"
 #include "coarsegrain/sim/phase.hpp"
+#include "export.hpp"
 #include "output.hpp"
 #include "plots.hpp"
 
@@ -60,16 +60,15 @@ const fem::RsWarp& fine_warp(const scene::Scene& sc, FineDynamics& fine) {
 /// and "per_step" go to `timings`.
 sim::Trajectory step_model(const scene::Scene& sc, const SparseMatrix& K, const SparseMatrix& M,
                            const Vector& f, const fem::Dirichlet& bc, const Vector& v0,
-                           const fem::CorotatedModel* corotated,
-                           const solve::SolverOptions& solver, const std::string& name,
-                           Timings& timings) {
+                           const fem::CorotatedModel* corotated, const solve::SolverOptions& solver,
+                           const std::string& name, Timings& timings) {
     const sim::DynamicsOptions& o = *sc.dynamics;
     std::pair<sim::State, Vector> start;
     {
         const Phase phase("initial state", &timings);
-        start = corotated ? sim::corotated_initial_state(*corotated, f, bc, v0, o, sc.corotation,
-                                                         solver)
-                          : sim::initial_state(K, f, bc, v0, o, solver);
+        start = corotated
+                    ? sim::corotated_initial_state(*corotated, f, bc, v0, o, sc.corotation, solver)
+                    : sim::initial_state(K, f, bc, v0, o, solver);
     }
     sim::Trajectory run =
         corotated ? sim::simulate_corotated(*corotated, M, bc, start.first, start.second, o,
@@ -80,15 +79,21 @@ sim::Trajectory step_model(const scene::Scene& sc, const SparseMatrix& K, const 
     return run;
 }
 
-/// A run's energy and solves per saved frame (summary "frames") over its `steps` steps.
-nlohmann::json frames_json(const sim::Trajectory& t, int steps) {
+/// A run's energy and solves per saved frame (summary "frames") over its `steps` steps; of a
+/// corotated run also its Krylov iterations and factorizations per frame.
+nlohmann::json frames_json(const sim::Trajectory& t, int steps, bool corotated) {
     int solves = 0;
     for (const int i : t.iterations) solves += i;
-    return {{"energy", t.energy},
-            {"energy_drift", t.energy_drift()},
-            {"solves", t.iterations},
-            {"solves_per_step", static_cast<double>(solves) / steps},
-            {"step_seconds", t.step_seconds}};
+    nlohmann::json j = {{"energy", t.energy},
+                        {"energy_drift", t.energy_drift()},
+                        {"solves", t.iterations},
+                        {"solves_per_step", static_cast<double>(solves) / steps},
+                        {"step_seconds", t.step_seconds}};
+    if (corotated) {
+        j["krylov_iterations"] = t.krylov_iterations;
+        j["factorizations"] = t.factorizations;
+    }
+    return j;
 }
 
 FineDynamics with_fine_mass(const scene::FineModel& model, fem::MassType mass, Timings timings) {
@@ -259,8 +264,8 @@ void carry_frames(const scene::Scene& sc, const mesh::Mesh& mesh, const FineRefe
 /// the same time.
 template <class Frame>
 RunResult compare_with_fine(const scene::Scene& sc, const mesh::Mesh& mesh,
-                            const FineReference& ref, const std::vector<double>& times,
-                            Frame frame, const std::string& name, const fs::path& dir) {
+                            const FineReference& ref, const std::vector<double>& times, Frame frame,
+                            const std::string& name, const fs::path& dir) {
     RunResult r;
     double diff2 = 0, norm2 = 0, probe_diff = 0, probe_max = 0;
     const std::vector<std::vector<Eigen::VectorXd>>& fine_probes = ref.result.probes;
@@ -301,11 +306,10 @@ RunResult run_coarse(const scene::Scene& sc, FineDynamics& fine, const FineRefer
         sc.kinematics == sim::Kinematics::Corotational && m.element_model.has_value();
     std::optional<fem::CorotatedModel> model;
     if (corotated) model.emplace(coarsen::corotated_model(m, sc.corotation.frame));
-    const sim::Trajectory run =
-        step_model(sc, m.K, c.M, m.f, m.bc, v0, corotated ? &*model : nullptr,
-                   corotated ? coarsen::node_solver_options(m, sc.solver) : sc.solver, method,
-                   c.timings);
-    frames = frames_json(run, o.steps);
+    const sim::Trajectory run = step_model(
+        sc, m.K, c.M, m.f, m.bc, v0, corotated ? &*model : nullptr,
+        corotated ? coarsen::node_solver_options(m, sc.solver) : sc.solver, method, c.timings);
+    frames = frames_json(run, o.steps, corotated);
     frames["kinematics"] = corotated ? "corotational" : "linear";
     const fem::RsWarp* warp = sc.rs_warp && !corotated ? &fine_warp(sc, fine) : nullptr;
     frames["warp"] = warp ? "rs" : "none";
@@ -423,15 +427,14 @@ sim::Trajectory run_fine(const scene::Scene& sc, FineDynamics& fine, FineReferen
     const Vector v0 = sim::uniform_field(fm.K.rows(), sc.dynamics->initial_velocity);
     sim::Trajectory run;
     if (sc.kinematics == sim::Kinematics::Corotational) {
-        const fem::CorotatedModel model(fm.mesh, fm.materials, sc.formulation,
-                                        sc.corotation.frame);
+        const fem::CorotatedModel model(fm.mesh, fm.materials, sc.formulation, sc.corotation.frame);
         solve::SolverOptions node_options = sc.solver;
         node_options.node_dofs = fm.mesh.dim();
         run = step_model(sc, fm.K, fine.M, fm.f, fm.bc, v0, &model, node_options, "fine",
                          fine.timings);
     } else {
-        run = step_model(sc, fm.K, fine.M, fm.f, fm.bc, v0, nullptr, sc.solver, "fine",
-                         fine.timings);
+        run =
+            step_model(sc, fm.K, fine.M, fm.f, fm.bc, v0, nullptr, sc.solver, "fine", fine.timings);
         if (sc.rs_warp) {
             const fem::RsWarp& warp = fine_warp(sc, fine);
             const auto begin = std::chrono::steady_clock::now();
@@ -461,7 +464,7 @@ RunResult run_fine_linear(const scene::Scene& sc, FineDynamics& fine, const Fine
     RunResult r = compare_with_fine(
         sc, fm.mesh, ref, run.times, [&](std::size_t i) { return run.u[i]; }, "fine-linear", dir);
     entry = {{"timings", timings_json(timings)},
-             {"frames", frames_json(run, sc.dynamics->steps)},
+             {"frames", frames_json(run, sc.dynamics->steps, false)},
              {"errors",
               {{"trajectory_l2_rel", r.trajectory_l2_rel}, {"probe_max_rel", r.probe_max_rel}}}};
     if (ref.series) entry["pvd"] = "fine-linear.pvd";
@@ -539,9 +542,9 @@ SimulateRun simulate_models(const scene::Scene& sc, FineDynamics& fine,
                 e["coarse"]["frames"] = frames;
                 e["probes"] = probes;
                 e["timings"] = {{"coarse", timings_json(c.timings)}};
-                e["speedup"] = {{"per_step", run.per_step_seconds / c.timings["per_step"]},
-                                {"per_frame", frame_seconds(fine.timings, o) /
-                                                  frame_seconds(c.timings, o)}};
+                e["speedup"] = {
+                    {"per_step", run.per_step_seconds / c.timings["per_step"]},
+                    {"per_frame", frame_seconds(fine.timings, o) / frame_seconds(c.timings, o)}};
                 e["errors"] = {{"trajectory_l2_rel", results[k].trajectory_l2_rel},
                                {"probe_max_rel", results[k].probe_max_rel},
                                {"phase", phase_json(run.times, ref.result, results[k],
@@ -586,12 +589,14 @@ SimulateRun simulate_models(const scene::Scene& sc, FineDynamics& fine,
         {"plots", plots},
         {"animation_frames", ref.shown.size()},
     };
-    summary["fine"]["frames"] = frames_json(run, o.steps);
+    summary["fine"]["frames"] =
+        frames_json(run, o.steps, sc.kinematics == sim::Kinematics::Corotational);
     if (sc.kinematics == sim::Kinematics::Corotational) {
         const sim::CorotationOptions& c = sc.corotation;
         summary["corotation"] = {{"frame", fem::corotation_frame_name(c.frame)},
                                  {"tangent", sim::tangent_name(c.tangent)},
                                  {"step", sim::step_iterations_name(c.step)},
+                                 {"linear_solve", sim::linear_solve_name(c.linear_solve)},
                                  {"tolerance", c.tolerance}};
         summary["fine"]["linear"] = fine_linear;
     }
@@ -668,8 +673,8 @@ void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
     const auto solves = [](const nlohmann::json& frames) {
         return frames["solves_per_step"].get<double>();
     };
-    std::printf("  %-20s %9d %12.4f %12.3e %7.2f %10s %12s %10s\n", "fine",
-                fine["dofs"].get<int>(), fine["timings"]["factorize"].get<double>(),
+    std::printf("  %-20s %9d %12.4f %12.3e %7.2f %10s %12s %10s\n", "fine", fine["dofs"].get<int>(),
+                fine["timings"]["factorize"].get<double>(),
                 fine["timings"]["per_step"].get<double>(), solves(fine["frames"]), "", "", "");
     if (fine.contains("linear")) {
         const nlohmann::json& l = fine["linear"];
@@ -687,9 +692,9 @@ void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
         const nlohmann::json& frames = e["coarse"]["frames"];
         const bool linear_here = frames["kinematics"] != summary["kinematics"];
         const std::string name =
-            e["method"].get<std::string>() +
-            (frames["warp"] == "rs" ? (linear_here ? " (linear+warp)" : " (+warp)")
-                                    : (linear_here ? " (linear)" : ""));
+            e["method"].get<std::string>() + (frames["warp"] == "rs"
+                                                  ? (linear_here ? " (linear+warp)" : " (+warp)")
+                                                  : (linear_here ? " (linear)" : ""));
         std::printf("  %-20s %9d %12.4f %12.3e %7.2f %9.1fx %12.4g %10s\n", name.c_str(),
                     e["coarse"]["dofs"].get<int>(),
                     e["timings"]["coarse"]["factorize"].get<double>(),

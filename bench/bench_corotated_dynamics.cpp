@@ -25,11 +25,11 @@
 //       [--no-factorize] [--out FILE]
 //
 // The fine step has 56,355 DOFs; the effective tensors' coarse one 675, the hierarchy's 1275
-// (dense). With the defaults the run took 20 min at 1 thread on a shared 2-core machine, of which
-// the hierarchy's build with global solves took 812 s (peak 10.8 GB) and the fine factorizing
-// frames 88 s each (both tangents): --no-hierarchy and --no-factorize skip them (about 4 min
-// left). Every frame count and the step are options; the fine reference of the ratios is
-// the fastest fine variant measured.
+// (dense). With the defaults the run took 41 min at 1 thread on a 2-core machine shared with
+// another build, of which the hierarchy's build with global solves took 819 s (peak 10.8 GB),
+// the fine factorizing frames 83 s each (both tangents) and the lagged fine variants' 20
+// untimed warm-up steps about 4 min: --no-hierarchy and --no-factorize skip the first two.
+// Every frame count and the step are options.
 #include <fmt/format.h>
 #include <omp.h>
 

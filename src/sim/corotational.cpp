@@ -612,7 +612,8 @@ Trajectory simulate_corotated(const fem::CorotatedModel& model, const SparseMatr
         [&](State& s) {
             ++k;
             try {
-                return stepper.step(s, f).iterations;
+                const NewtonReport r = stepper.step(s, f);
+                return StepSolves{r.iterations, r.krylov_iterations, r.factorizations};
             } catch (const NewtonFailed& e) {
                 throw NewtonFailed(
                     fmt::format("step {} (t = {:g}): {}", k, k * dynamics.dt, e.what()));

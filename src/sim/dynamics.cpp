@@ -190,28 +190,33 @@ Trajectory run_steps(const State& start, const DynamicsOptions& options, const S
                      const std::string& name) {
     Trajectory t;
     State s = start;
-    const auto save = [&](double time, int iterations, double seconds) {
+    const auto save = [&](double time, const StepSolves& solves, double seconds) {
         t.times.push_back(time);
         t.u.push_back(s.u);
         t.energy.push_back(energy(s));
         t.kinetic.push_back(0.5 * s.v.dot(M * s.v));
-        t.iterations.push_back(iterations);
+        t.iterations.push_back(solves.solves);
+        t.krylov_iterations.push_back(solves.krylov_iterations);
+        t.factorizations.push_back(solves.factorizations);
         t.step_seconds.push_back(seconds);
     };
-    save(0, 0, 0);
+    save(0, {}, 0);
     StepProgress progress(name.empty() ? "model" : name, options.steps);
     double stepping = 0, since_frame = 0;
-    int iterations = 0;
+    StepSolves frame;  // the solves since the last saved frame
     for (int k = 1; k <= options.steps; ++k) {
         const auto begin = std::chrono::steady_clock::now();
-        iterations += step(s);
+        const StepSolves solves = step(s);
+        frame.solves += solves.solves;
+        frame.krylov_iterations += solves.krylov_iterations;
+        frame.factorizations += solves.factorizations;
         const double seconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
         stepping += seconds;
         since_frame += seconds;
         if (k % options.output_every == 0) {
-            save(k * options.dt, iterations, since_frame);
-            iterations = 0;
+            save(k * options.dt, frame, since_frame);
+            frame = {};
             since_frame = 0;
         }
         progress.tick(k);
@@ -233,7 +238,7 @@ Trajectory simulate(const SparseMatrix& K, const SparseMatrix& M, const fem::Dir
         start, options, M,
         [&](State& s) {
             stepper->step(s, f);
-            return 1;
+            return StepSolves{1, 0, 0};
         },
         [&](const State& s) { return stepper->energy(s, f); }, name);
     t.factorize_seconds = timings.entries().back().second;

@@ -211,13 +211,50 @@ TEST(CliCorotational, SimulateStepsElementModelsCorotatedAndWarpsTheHierarchy) {
     EXPECT_EQ(et["coarse"]["frames"]["warp"], "none");
     EXPECT_EQ(mra["coarse"]["frames"]["kinematics"], "linear");
     EXPECT_EQ(mra["coarse"]["frames"]["warp"], "rs");
+    EXPECT_FALSE(mra["coarse"]["frames"].contains("factorizations"));
     EXPECT_GT(mra["timings"]["coarse"]["warp_per_frame"].get<double>(), 0.0);
     // The errors of 6 coarse tets and of 2 levels (measured 0.31 and 0.24, against 0.23 for
     // the linear fine model): coarsening errors; the accordion tests compare methods.
-    std::printf("  trajectory l2 against the corotated fine model: linear fine %.3f, "
-                "effective-tensor %.3f, mra-linear + warp %.3f\n",
-                s["fine"]["linear"]["errors"]["trajectory_l2_rel"].get<double>(),
-                et["errors"]["trajectory_l2_rel"].get<double>(),
-                mra["errors"]["trajectory_l2_rel"].get<double>());
+    std::printf(
+        "  trajectory l2 against the corotated fine model: linear fine %.3f, "
+        "effective-tensor %.3f, mra-linear + warp %.3f\n",
+        s["fine"]["linear"]["errors"]["trajectory_l2_rel"].get<double>(),
+        et["errors"]["trajectory_l2_rel"].get<double>(),
+        mra["errors"]["trajectory_l2_rel"].get<double>());
 }
 
+TEST(CliCorotational, SimulateCountsTheKrylovIterationsAndFactorizationsPerFrame) {
+    // corotation.linear_solve "factorize": every Newton iteration factorizes. "lagged_krylov"
+    // (the default): the first Newton iteration of each run factorizes, the others solve by
+    // Krylov iterations preconditioned by that factorization (refreshed only when they fail),
+    // fine and coarse alike.
+    const std::string dir = temp_dir("cli_corotational_lagged");
+    for (const bool lagged : {false, true}) {
+        json scene = corotated_scene();
+        if (!lagged) scene["corotation"] = {{"linear_solve", "factorize"}};
+        scene["dynamics"] = {{"dt", 0.05}, {"steps", 12}, {"output_every", 4}};
+        const std::string out = dir + (lagged ? "/lagged" : "/factorize");
+        const Result r =
+            cli("simulate " + write_scene(dir, scene) + " --method effective-tensor --out " + out);
+        ASSERT_EQ(r.code, 0) << r.output;
+        const json s = read_json(out + "/summary.json");
+        EXPECT_EQ(s["corotation"]["linear_solve"], lagged ? "lagged_krylov" : "factorize");
+        for (const json* frames : {&s["fine"]["frames"], &s["coarse"]["frames"]}) {
+            int solves = 0, factorizations = 0, krylov = 0;
+            ASSERT_EQ((*frames)["factorizations"].size(), 4u);
+            for (std::size_t i = 0; i < 4; ++i) {
+                solves += (*frames)["solves"][i].get<int>();
+                factorizations += (*frames)["factorizations"][i].get<int>();
+                krylov += (*frames)["krylov_iterations"][i].get<int>();
+            }
+            if (lagged) {
+                EXPECT_EQ((*frames)["factorizations"][1], 1);  // the run's first iteration
+                EXPECT_LT(factorizations, solves);
+                EXPECT_GE(krylov, solves - factorizations);  // one or more per Krylov solve
+            } else {
+                EXPECT_EQ((*frames)["factorizations"], (*frames)["solves"]);
+                EXPECT_EQ(krylov, 0);
+            }
+        }
+    }
+}

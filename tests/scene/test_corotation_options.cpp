@@ -10,7 +10,7 @@ namespace {
 
 TEST(CorotationOptions, LinearSolveNamesTheKrylovOption) {
     EXPECT_EQ(scene::parse_corotation_options(nlohmann::json::object(), "s.json").linear_solve,
-              sim::LinearSolve::Factorize);
+              sim::LinearSolve::LaggedKrylov);
     for (const sim::LinearSolve solve : {sim::LinearSolve::Factorize, sim::LinearSolve::RestKrylov,
                                          sim::LinearSolve::LaggedKrylov}) {
         const nlohmann::json j = {{"linear_solve", sim::linear_solve_name(solve)}};

@@ -111,13 +111,17 @@ class TimeStepper {
 
 /// Saved frames of a run.
 struct Trajectory {
-    std::vector<double> times;   ///< t = 0 and every output_every-th step
-    std::vector<Vector> u;       ///< displacement over all DOFs at each saved time
-    std::vector<double> energy;  ///< the stepper's discrete energy at each saved time
+    std::vector<double> times;    ///< t = 0 and every output_every-th step
+    std::vector<Vector> u;        ///< displacement over all DOFs at each saved time
+    std::vector<double> energy;   ///< the stepper's discrete energy at each saved time
     std::vector<double> kinetic;  ///< ½ vᵀM v at each saved time
     /// Solves with the step matrix of the steps since the previous saved time (0 at t = 0): one
     /// per step for linear models, the Newton iterations for corotated ones.
     std::vector<int> iterations;
+    /// Of a corotated run, the Krylov iterations of those steps and the factorizations among
+    /// their solves (corotation.linear_solve); zero for a linear run, which factorizes once
+    /// before its first step.
+    std::vector<int> krylov_iterations, factorizations;
     std::vector<double> step_seconds;  ///< wall time of those steps
     double factorize_seconds = 0;
     double per_step_seconds = 0;  ///< wall time of the step loop / steps (frames not included)
@@ -127,8 +131,16 @@ struct Trajectory {
     double energy_drift() const;
 };
 
-/// One step of a model: advances the state and returns its solves with the step matrix.
-using Step = std::function<int(State& s)>;
+/// The linear solves of one step: with its step matrix, and of a corotated step the Krylov
+/// iterations and the factorizations among them.
+struct StepSolves {
+    int solves = 0;
+    int krylov_iterations = 0;
+    int factorizations = 0;
+};
+
+/// One step of a model: advances the state and returns its solves.
+using Step = std::function<StepSolves(State& s)>;
 
 /// The step loop of simulate and simulate_corotated: options.steps steps of `step` from
 /// `start`, a frame (with energy(state) and ½ vᵀM v) saved every options.output_every steps and
