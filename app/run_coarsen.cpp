@@ -78,7 +78,7 @@ coarsen::MethodRun timed_method_run(const scene::Scene& sc, FineRun& f, const st
     }
     for (int repeat = 1; repeat < 5 && total < 0.1; ++repeat) {
         Timings t;
-        coarsen::solve_coarse(run.model, sc, &t);
+        coarsen::solve_coarse_for_scene(run.model, sc, &t);
         for (std::size_t i = 0; i < phases.size(); ++i) {
             best[i] = std::min(best[i], t[phases[i]]);
             total += t[phases[i]];

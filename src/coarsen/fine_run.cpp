@@ -39,7 +39,8 @@ bool solves_corotated(const CoarseModel& model, const scene::Scene& sc) {
     return sc.kinematics == sim::Kinematics::Corotational && model.element_model.has_value();
 }
 
-CoarseSolution solve_coarse(const CoarseModel& model, const scene::Scene& sc, Timings* timings) {
+CoarseSolution solve_coarse_for_scene(const CoarseModel& model, const scene::Scene& sc,
+                                      Timings* timings) {
     return solves_corotated(model, sc)
                ? solve_coarse_corotated(model, sc.corotation, sc.solver, timings)
                : solve_coarse(model, sc.solver, timings);
@@ -56,7 +57,7 @@ MethodRun run_method(const scene::Scene& sc, FineRun& f, const std::string& meth
                      Timings* timings) {
     MethodRun r;
     r.model = build_coarse_model(sc, f.model, method, f.linear_solution().factorization.get());
-    r.solution = solve_coarse(r.model, sc, timings);
+    r.solution = solve_coarse_for_scene(r.model, sc, timings);
     warp_coarse_solution(r.solution, sc, f, timings);
     r.errors = compare(f.model, f.solution.u, r.solution.u_fine);
     return r;

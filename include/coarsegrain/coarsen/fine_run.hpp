@@ -63,8 +63,8 @@ bool solves_corotated(const CoarseModel& model, const scene::Scene& scene);
 /// Solves a coarse model with the scene's kinematics (solve_coarse_corotated if
 /// solves_corotated, else solve_coarse), not warped. Phases "newton", "factorize", "solve".
 /// @throws as solve_coarse / solve_coarse_corotated
-CoarseSolution solve_coarse(const CoarseModel& model, const scene::Scene& scene,
-                            Timings* timings = nullptr);
+CoarseSolution solve_coarse_for_scene(const CoarseModel& model, const scene::Scene& scene,
+                                      Timings* timings = nullptr);
 
 /// Post-warps a linear coarse solution's u_fine with the run's RS warp if the scene asks for it
 /// ("warp": "rs"; corotated solutions are not warped). Phase "warp" to `timings`.
@@ -80,7 +80,7 @@ struct MethodRun {
 };
 
 /// Builds the method's coarse model (build_coarse_model with the run's fine factorization),
-/// solves it (solve_coarse, warp_coarse_solution) and compares it with the fine solution.
+/// solves it (solve_coarse_for_scene, warp_coarse_solution) and compares it with the fine solution.
 /// Build phases go to the model's timings, the solve's to `timings`.
 /// @throws as validate_method, build_coarse_model, solve_coarse
 MethodRun run_method(const scene::Scene& scene, FineRun& run, const std::string& method,
