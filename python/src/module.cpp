@@ -218,7 +218,6 @@ struct PyFine {
     std::shared_ptr<const cg::scene::Scene> scene;
     std::shared_ptr<cg::coarsen::FineRun> run;
     bool solved = false;
-    std::vector<std::string> solved_for;  ///< methods the solve kept the factorization for
     std::once_flag mass_once;
     cg::SparseMatrix M;  ///< fine mass, on request
     std::mutex mutex;    ///< held while the run changes (solve, warp)
@@ -274,11 +273,8 @@ std::shared_ptr<PyFine> build_fine(const std::shared_ptr<const cg::scene::Scene>
 // if `method` uses it.
 void solve_fine(PyFine& fine, const cg::scene::Scene& scene, const std::string& method) {
     if (fine.solved) return;
-    cg::coarsen::FineRun& run = *fine.run;
-    cg::python::run_interruptible([&] {
-        run =
-            cg::coarsen::solve_fine(scene, std::move(run.model), {method}, std::move(run.timings));
-    });
+    // in place: if the solve fails or is interrupted, the model stays usable
+    cg::python::run_interruptible([&] { cg::coarsen::solve_fine(scene, *fine.run, {method}); });
     fine.solved = true;
 }
 
@@ -303,7 +299,12 @@ std::shared_ptr<PyResult> coarsen(const std::shared_ptr<const cg::scene::Scene>&
     result->coarse = std::make_shared<PyCoarse>();
     result->coarse->fine = fine;
     {
-        const std::lock_guard<std::mutex> lock(fine->mutex);
+        // Locked without the GIL: the thread that holds the lock needs the GIL to finish.
+        std::unique_lock<std::mutex> lock(fine->mutex, std::defer_lock);
+        {
+            const py::gil_scoped_release release;
+            lock.lock();
+        }
         solve_fine(*fine, *scene, method);
         cg::coarsen::MethodRun run;
         cg::python::run_interruptible([&] {

@@ -82,10 +82,17 @@ def test_singular_model_raises_the_cli_message(tmp_path):
     del d["dirichlet"]
     path = write_scene(tmp_path / "free.json", d)
     expected = cli_error("solve", path, "--out", tmp_path / "out")
-    fine = cg.build_fine_model(cg.load_scene(str(path)))
+    scene = cg.load_scene(str(path))
+    fine = cg.build_fine_model(scene)
     with pytest.raises(cg.NotPositiveDefinite) as e:
         fine.solve_static()
     assert str(e.value) == expected
+    # coarsen's fine solve fails the same way and leaves the model as it was
+    nnz = fine.stiffness.nnz
+    with pytest.raises(cg.NotPositiveDefinite) as e:
+        cg.coarsen(scene, "naive", fine=fine)
+    assert str(e.value) == expected
+    assert fine.stiffness.nnz == nnz > 0 and fine.load.shape == (fine.num_dofs,)
 
 
 def test_lumped_mass_when_the_scene_asks():

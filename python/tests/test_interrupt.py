@@ -7,6 +7,8 @@ import textwrap
 import threading
 import time
 
+import pytest
+
 import coarsegrain as cg
 
 # A call of about 4 s (the demo beam at scale 0.67, 32 x 8 x 8 hexes, the 3-level hierarchy),
@@ -73,3 +75,26 @@ def test_the_gil_is_released():
     during = [x for x in ticks if start + 0.1 < x < end - 0.1]
     # 10 ms sleeps over the call: at least a quarter of the possible ticks
     assert len(during) >= 0.25 * (end - start - 0.2) / 0.01, (len(during), end - start)
+
+
+def test_threads_share_a_fine_model():
+    """Two threads coarsen with one FineModel at once: the second waits for the first's fine
+    solve (without holding the GIL, which the first needs to finish) and reuses it."""
+    scene = cg.scene_from_dict(cg.demo_scene(0.25))
+    fine = cg.build_fine_model(scene)
+    results = {}
+
+    def run(method):
+        results[method] = cg.coarsen(scene, method, fine=fine)
+
+    threads = [threading.Thread(target=run, args=(m,)) for m in ("naive", "reuss")]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=60)
+    assert not any(t.is_alive() for t in threads), "deadlock"
+    for method, r in results.items():
+        alone = cg.coarsen(scene, method)
+        # the same computation on the same data: round-off of the solvers' reductions
+        for key, value in alone.errors.items():
+            assert r.errors[key] == pytest.approx(value, rel=1e-9), (method, key)

@@ -9,6 +9,11 @@ FineRun solve_fine(const scene::Scene& sc, scene::FineModel model,
     FineRun f;
     f.model = std::move(model);
     f.timings = std::move(timings);
+    solve_fine(sc, f, methods);
+    return f;
+}
+
+void solve_fine(const scene::Scene& sc, FineRun& f, const std::vector<std::string>& methods) {
     const bool keep = uses_fine_factorization(sc, f.model, methods);
     if (sc.kinematics == sim::Kinematics::Corotational) {
         f.solution = scene::solve_corotated(f.model, sc, &f.timings);
@@ -24,7 +29,6 @@ FineRun solve_fine(const scene::Scene& sc, scene::FineModel model,
         f.solution.u = warp(f.solution.u);
     }
     f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
-    return f;
 }
 
 const fem::RsWarp& fine_warp(const scene::Scene& sc, FineRun& f) {

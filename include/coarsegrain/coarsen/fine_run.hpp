@@ -52,6 +52,10 @@ struct FineRun {
 FineRun solve_fine(const scene::Scene& scene, scene::FineModel model,
                    const std::vector<std::string>& methods, Timings timings = {});
 
+/// solve_fine on a run whose model (and timings) are set: fills in its solution, linear solution,
+/// warp and probes. If it throws, run.model is unchanged.
+void solve_fine(const scene::Scene& scene, FineRun& run, const std::vector<std::string>& methods);
+
 /// The run's RS post-warp of fine displacements (Chen et al. 2019, Eq. 13), factorized on first
 /// use (phase "warp" in run.timings), so that only a run with a linear solution to warp pays.
 const fem::RsWarp& fine_warp(const scene::Scene& scene, FineRun& run);
