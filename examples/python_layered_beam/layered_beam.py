@@ -87,7 +87,7 @@ def main():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = plt.subplots(figsize=(9, 4))
     for axis, marker in (("x", "o"), ("y", "s"), ("z", "^")):
         ax.semilogy(centre[:, 0], young[axis], marker, ms=4, label=f"E_{axis} effective")
     ax.axhline(voigt, color="k", ls="--", lw=1, label="arithmetic mean of E (Voigt)")
@@ -95,7 +95,7 @@ def main():
     ax.set_xlabel("x of the coarse element's centre")
     ax.set_ylabel("directional Young's modulus")
     ax.set_title(f"Effective tensors of the layered beam ({model.num_elements} coarse tets)")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1))
     fig.tight_layout()
     fig.savefig(out / "effective_young.png", dpi=120)
 
