@@ -37,9 +37,7 @@ void write_matrices(const scene::Scene& sc, const scene::FineModel& fine,
     io::write_matrix_market((dir / "coarse_f.mtx").string(), Matrix(coarse.f),
                             about + "\ncoarse load f: K u = f");
     if (mass || coarse.mass) {
-        const fem::MassType type = sc.dynamics ? sc.dynamics->mass : fem::MassType::Consistent;
-        const SparseMatrix M =
-            mass ? *mass : coarse.mass(fem::mass_matrix(fine.mesh, fine.materials, type));
+        const SparseMatrix M = mass ? *mass : coarse.mass(scene::mass_matrix(sc, fine));
         io::write_matrix_market((dir / "coarse_M.mtx").string(), M,
                                 about + "\ncoarse mass M, coarse DOFs square");
     }

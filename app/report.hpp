@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "coarsegrain/coarsen/fine_run.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
-#include "coarsegrain/fem/rs_warp.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
 namespace coarsegrain::app {
@@ -17,30 +17,8 @@ namespace coarsegrain::app {
 /// The folder of `coarsegrain demo`'s dynamic run inside its output folder.
 inline constexpr const char* kDemoDynamicsFolder = "dynamics";
 
-/// The fine side of a comparison, computed once for every method.
-struct FineRun {
-    scene::FineModel model;
-    /// The fine solution every method is compared with: linear, or corotated with the scene's
-    /// "kinematics": "corotational".
-    scene::StaticSolution solution;
-    /// With corotated kinematics or a warp, the linear solution too (phase "linear solve" if it
-    /// took one): the hierarchy's level diagnostics are those of the linear operator.
-    std::optional<scene::StaticSolution> linear;
-    /// With "warp": "rs", the post-warp of fine displacements, factorized once, when a linear
-    /// solution first needs it (phase "warp").
-    std::shared_ptr<const fem::RsWarp> warp;
-    /// read, assemble, [newton,] factorize, solve, [linear solve,] [warp,] write
-    Timings timings;
-    std::vector<Eigen::VectorXd> probes;
-
-    /// The solution's seconds: factorizations and solves, and Newton's evaluations.
-    double factorize_and_solve() const {
-        return timings["newton"] + timings["factorize"] + timings["solve"];
-    }
-    /// The linear solution: the one the methods' fine comparisons (CoarseModel::compare_with_fine)
-    /// use, with the factorization of K_ff if kept (coarsen::uses_fine_factorization).
-    const scene::StaticSolution& linear_solution() const { return linear ? *linear : solution; }
-};
+/// The fine side of a comparison, computed once for every method (coarsen::solve_fine).
+using FineRun = coarsen::FineRun;
 
 /// One method's run against the fine run.
 struct MethodResult {

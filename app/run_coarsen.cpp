@@ -29,49 +29,15 @@ double sum(const Timings& t) {
     return s;
 }
 
-nlohmann::json errors_json(const coarsen::Errors& e) {
-    return {{"energy_rel", e.energy_rel},
-            {"energy_over_load", e.energy_over_load},
-            {"l2_rel", e.l2_rel},
-            {"max_displacement_rel", e.max_displacement_rel},
-            {"compliance_ratio", e.compliance_ratio},
-            {"stress_rel", e.stress_rel}};
-}
-
-// The run's RS post-warp of fine displacements, factorized on first use (phase "warp": only a
-// run with a linear solution to warp pays for it).
-const fem::RsWarp& rs_warp(const scene::Scene& sc, FineRun& f) {
-    if (!f.warp) {
-        const Phase phase("warp", &f.timings);
-        f.warp = std::make_shared<const fem::RsWarp>(f.model.mesh, f.model.bc, sc.solver);
-    }
-    return *f.warp;
-}
-
-// The fine model and its solution; the solution keeps the factorization if one of `methods`
-// uses it.
+// The fine model and its solution (coarsen::solve_fine); the solution keeps the factorization if
+// one of `methods` uses it.
 FineRun solve_fine(const scene::Scene& sc, const std::vector<std::string>& methods,
                    double read_seconds) {
-    FineRun f;
-    f.timings.add("read", read_seconds);
-    f.model = scene::build_fine_model(sc, &f.timings);
-    print_warnings(f.model.warnings);
-    const bool keep = coarsen::uses_fine_factorization(sc, f.model, methods);
-    if (sc.kinematics == sim::Kinematics::Corotational) {
-        f.solution = scene::solve_corotated(f.model, sc, &f.timings);
-        const Phase phase("linear solve", &f.timings);
-        f.linear = scene::solve_static(f.model, sc.solver, nullptr, keep);
-    } else {
-        f.solution = scene::solve_static(f.model, sc.solver, &f.timings, keep);
-    }
-    if (sc.rs_warp && sc.kinematics == sim::Kinematics::Linear) {
-        f.linear = f.solution;
-        const fem::RsWarp& warp = rs_warp(sc, f);
-        const Phase phase("warp", &f.timings);
-        f.solution.u = warp(f.solution.u);
-    }
-    f.probes = scene::probe_displacements(sc, f.model.mesh, f.solution.u);
-    return f;
+    Timings timings;
+    timings.add("read", read_seconds);
+    scene::FineModel model = scene::build_fine_model(sc, &timings);
+    print_warnings(model.warnings);
+    return coarsen::solve_fine(sc, std::move(model), methods, std::move(timings));
 }
 
 void write_fine(FineRun& f, const fs::path& dir) {
@@ -93,23 +59,17 @@ nlohmann::json fine_json_of(const scene::Scene& sc, const FineRun& f) {
     return j;
 }
 
-// Solves the coarse model (corotated if the scene asks for it and the model has elements to
-// rotate, else linear, then post-warped if the scene asks for it) and adds its "newton",
-// "factorize", "solve" and "warp" seconds to `timings`. A coarse solve of a few milliseconds is
-// at the mercy of the scheduler (one descheduled OpenMP worker costs more than the whole
-// factorization), so short solves are repeated, up to 5 times and 0.1 s in all, and the fastest
-// run of each phase is reported.
-coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
-                                           const scene::Scene& sc, FineRun& f, Timings& timings) {
-    const bool corotated =
-        sc.kinematics == sim::Kinematics::Corotational && model.element_model.has_value();
-    const auto solve = [&](Timings* t) {
-        return corotated ? coarsen::solve_coarse_corotated(model, sc.corotation, sc.solver, t)
-                         : coarsen::solve_coarse(model, sc.solver, t);
-    };
-    const std::vector<std::string> phases = {"newton", "factorize", "solve"};
+// Builds, solves (as the scene asks: coarsen::run_method) and compares the method's coarse
+// model, and adds the solve's "newton", "factorize", "solve" and "warp" seconds to `timings`. A
+// coarse solve of a few milliseconds is at the mercy of the scheduler (one descheduled OpenMP
+// worker costs more than the whole factorization), so short solves are repeated, up to 5 times
+// and 0.1 s in all, and the fastest run of each phase is reported.
+coarsen::MethodRun timed_method_run(const scene::Scene& sc, FineRun& f, const std::string& method,
+                                    Timings& timings) {
     Timings first;
-    coarsen::CoarseSolution s = solve(&first);
+    coarsen::MethodRun run = coarsen::run_method(sc, f, method, &first);
+    timings = run.model.timings;
+    const std::vector<std::string> phases = {"newton", "factorize", "solve"};
     std::vector<double> best;
     double total = 0;
     for (const std::string& p : phases) {
@@ -118,7 +78,7 @@ coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
     }
     for (int repeat = 1; repeat < 5 && total < 0.1; ++repeat) {
         Timings t;
-        solve(&t);
+        coarsen::solve_coarse_for_scene(run.model, sc, &t);
         for (std::size_t i = 0; i < phases.size(); ++i) {
             best[i] = std::min(best[i], t[phases[i]]);
             total += t[phases[i]];
@@ -126,12 +86,8 @@ coarsen::CoarseSolution timed_coarse_solve(const coarsen::CoarseModel& model,
     }
     for (std::size_t i = 0; i < phases.size(); ++i)
         if (best[i] > 0 || phases[i] != "newton") timings.add(phases[i], best[i]);
-    if (sc.rs_warp && !s.newton) {  // a linear solution, post-warped on the fine mesh
-        const fem::RsWarp& warp = rs_warp(sc, f);
-        const Phase phase("warp", &timings);
-        s.u_fine = warp(s.u_fine);
-    }
-    return s;
+    if (sc.rs_warp && !run.solution.newton) timings.add("warp", first["warp"]);
+    return run;
 }
 
 // Writes solution_<name>.vtu of a fine displacement u_c (fields as the fine solution's, plus its
@@ -142,7 +98,7 @@ nlohmann::json write_solution(const fs::path& dir, const std::string& name, cons
     io::VtuFields fields = solution_fields(fine, u_c);
     fields.add_point_vector("error", u_c - u, fine.mesh.dim());
     io::write_vtu((dir / file).string(), fine.mesh, fields);
-    return {{"errors", errors_json(coarsen::compare(fine, u, u_c))},
+    return {{"errors", coarsen::errors_json(coarsen::compare(fine, u, u_c))},
             {"probes", probes_json(sc, scene::probe_displacements(sc, fine.mesh, u_c))},
             {"vtu", file}};
 }
@@ -178,22 +134,23 @@ nlohmann::json compare_with_fine(const coarsen::CoarseModel& coarse, const scene
 
 /// Builds, solves and compares one method against the fine run; writes its files and its
 /// summary.json to `dir`. `fine_vtu` is the fine solution's file as seen from `dir`; if
-/// `write_fine_vtu`, it is written there once the coarse model is built (so that a method that
-/// fails on its input leaves no file). With `keep_model` the result holds the coarse model.
+/// `write_fine_vtu`, it is written there once the coarse model is built and solved (so that a
+/// method that fails on its input leaves no file). With `keep_model` the result holds the coarse
+/// model.
 MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& method,
                         const fs::path& dir, const std::string& fine_vtu, bool write_fine_vtu,
                         const Exports& exports, bool keep_model = false) {
     const scene::FineModel& fine = f.model;
     const Vector& u = f.solution.u;
     const int dim = fine.mesh.dim();
-    coarsen::CoarseModel coarse =
-        coarsen::build_coarse_model(sc, fine, method, f.linear_solution().factorization.get());
+    Timings tc;
+    coarsen::MethodRun run = timed_method_run(sc, f, method, tc);
     if (write_fine_vtu) write_fine(f, dir);
-    Timings tc = coarse.timings;
-    const coarsen::CoarseSolution uc = timed_coarse_solve(coarse, sc, f, tc);
+    coarsen::CoarseModel& coarse = run.model;
+    const coarsen::CoarseSolution& uc = run.solution;
     MethodResult r;
     r.method = method;
-    r.errors = coarsen::compare(fine, u, uc.u_fine);
+    r.errors = run.errors;
     r.u_fine = uc.u_fine;
     {
         const Phase phase("write", &tc);
@@ -233,7 +190,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         {"threads", omp_get_max_threads()},
         {"probes",
          probes_json(sc, scene::probe_displacements(sc, fine.mesh, uc.u_fine), &f.probes)},
-        {"errors", errors_json(r.errors)},
+        {"errors", coarsen::errors_json(r.errors)},
         {"warnings", fine.warnings},
         {"speedup",
          {{"solve", f.timings["solve"] / tc["solve"]}, {"factorize_and_solve", r.speedup}}},
@@ -351,7 +308,7 @@ int finish_comparison(const scene::Scene& sc, const std::string& command, const 
               {{"dofs", r.dofs},
                {"timings",
                 {{"build", r.build_seconds}, {"factorize_and_solve", r.factorize_and_solve}}}}},
-             {"errors", errors_json(r.errors)},
+             {"errors", coarsen::errors_json(r.errors)},
              {"speedup", {{"factorize_and_solve", r.speedup}}},
              {"max_displacement", r.summary["max_displacement"]}});
     }

@@ -2,7 +2,10 @@
 # Tests the installed package: installs a build (default build/release) into a temporary prefix,
 # moves the prefix (an install must not depend on where it was made), builds and runs
 # tests/install/consumer against it with find_package(coarsegrain), and runs the installed
-# `coarsegrain demo --scale 0.25`, whose pictures must come from the installed plotting scripts.
+# `coarsegrain demo --scale 0.25`, whose pictures must come from the installed plotting scripts;
+# then installs the Python module with `pip install --no-build-isolation .` into a virtual
+# environment (Debian's /usr/bin/python3, --system-site-packages; setup.py builds into build/pip,
+# from ccache when build/release was built) and coarsens the demo beam with it.
 #   scripts/test_install.sh [BUILD_DIR]
 # Leaves nothing behind (the temporary folder is removed on exit, also on failure).
 set -euo pipefail
@@ -76,4 +79,16 @@ fi
 for png in deformed.png methods.png; do
   [ -s "$out/$png" ] || fail "the installed coarsegrain demo made no $png"
 done
-echo "test_install: the install, the consumer and the installed tool's plots pass" >&2
+
+# The Python module in a virtual environment: imported from there (its site-packages comes before
+# the system's, where the .pth of scripts/setup.sh names build/release/python), and it runs.
+step "creating a virtual environment" /usr/bin/python3 -m venv --system-site-packages "$tmp/venv"
+step "pip install --no-build-isolation ." "$tmp/venv/bin/pip" install --no-build-isolation "$root"
+(cd "$tmp" && env -u PYTHONPATH "$tmp/venv/bin/python" -c '
+import sys, coarsegrain as cg
+assert cg.__file__.startswith(sys.prefix), cg.__file__
+r = cg.coarsen(cg.scene_from_dict(cg.demo_scene(0.25)), "effective-tensor")
+assert set(r.errors) == {"energy_rel", "energy_over_load", "l2_rel", "max_displacement_rel",
+                         "compliance_ratio", "stress_rel"}, r.errors
+') || fail "the Python module installed by pip"
+echo "test_install: the install, the consumer, the installed tool's plots and pip install pass" >&2

@@ -11,7 +11,8 @@ namespace coarsegrain::coarsen {
 FineMap::FineMap(SparseMatrix M)
     : rows_(M.rows()),
       cols_(M.cols()),
-      apply_([M = std::move(M)](const Vector& u) -> Vector { return M * u; }) {}
+      matrix_(std::make_shared<const SparseMatrix>(std::move(M))),
+      apply_([M = matrix_](const Vector& u) -> Vector { return *M * u; }) {}
 
 FineMap::FineMap(Index rows, Index cols, Apply apply)
     : rows_(rows), cols_(cols), apply_(std::move(apply)) {}
@@ -22,6 +23,15 @@ Vector FineMap::apply(const Vector& u) const {
     Vector out = apply_(u);
     CG_VERIFY(out.size() == rows_, "fine map: {} fine values for {} fine DOFs", out.size(), rows_);
     return out;
+}
+
+nlohmann::json errors_json(const Errors& e) {
+    return {{"energy_rel", e.energy_rel},
+            {"energy_over_load", e.energy_over_load},
+            {"l2_rel", e.l2_rel},
+            {"max_displacement_rel", e.max_displacement_rel},
+            {"compliance_ratio", e.compliance_ratio},
+            {"stress_rel", e.stress_rel}};
 }
 
 namespace {

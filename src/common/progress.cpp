@@ -1,20 +1,28 @@
 #include "coarsegrain/common/progress.hpp"
 
+#include <omp.h>
+
 #include <atomic>
 #include <condition_variable>
 #include <cstdio>
 #include <mutex>
 #include <thread>
 
+#include "coarsegrain/common/error.hpp"
+
 namespace coarsegrain {
 
 namespace {
 std::atomic<bool> g_progress{false};
+std::atomic<bool> g_interrupt{false};
 std::mutex g_print;
 }  // namespace
 
 void set_progress_enabled(bool enabled) { g_progress = enabled; }
 bool progress_enabled() { return g_progress; }
+void request_interrupt() { g_interrupt = true; }
+void clear_interrupt() { g_interrupt = false; }
+bool interrupt_requested() { return g_interrupt; }
 
 void Timings::add(const std::string& phase, double seconds) {
     for (auto& [name, t] : m_entries)
@@ -42,6 +50,8 @@ struct Phase::Watch {
 
 Phase::Phase(std::string name, Timings* timings)
     : m_name(std::move(name)), m_timings(timings), m_start(std::chrono::steady_clock::now()) {
+    if (g_interrupt && !omp_in_parallel())
+        throw Interrupted(fmt::format("interrupted before phase \"{}\"", m_name));
     if (!progress_enabled()) return;
     m_watch = std::make_unique<Watch>();
     Watch* w = m_watch.get();

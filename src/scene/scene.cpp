@@ -277,9 +277,37 @@ std::vector<BoxCondition> parse_box_conditions(const JsonReader& r, int dim, boo
     return out;
 }
 
+// A given mesh (GivenMeshes), checked; its errors are InvalidScene.
+mesh::Mesh given_mesh(const mesh::Mesh& m, const std::string& source, const std::string& key) {
+    try {
+        mesh::validate(m, source + ": " + key);
+    } catch (const Error& e) {
+        throw InvalidScene(e.what());
+    }
+    return m;
+}
+
+// The hierarchy adapted to one time step (coarse.operator "step") needs the scene's dynamics.
+void check_coarse_operator(const Scene& s, const JsonReader& coarse) {
+    if (s.coarse.mra.fine_operator != mra::Operator::Step) return;
+    coarse.at("operator")
+        .fail_unless(
+            s.dynamics.has_value(),
+            "\"step\" adapts the hierarchy to one time step, which the scene's \"dynamics\" "
+            "block defines (dt, integrator, damping, mass); add one or use \"stiffness\"");
+}
+
+// The coarse mesh of coarse.mesh (`m`) on a scene of dimension dim.
+mesh::Mesh coarse_mesh(const JsonReader& m, int dim, const std::string& base_dir) {
+    mesh::Mesh coarse = parse_mesh(m, dim, base_dir);
+    m.fail_unless(coarse.dim() == dim, "the coarse mesh is {}D, the scene {}D", coarse.dim(), dim);
+    return coarse;
+}
+
 }  // namespace
 
-Scene parse_scene(const json& j, const std::string& source, const std::string& base_dir) {
+Scene parse_scene(const json& j, const std::string& source, const std::string& base_dir,
+                  const GivenMeshes& given) {
     Scene s;
     s.source = source;
     s.base_dir = base_dir;
@@ -331,16 +359,22 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
                        "remove this block");
         s.corotation = parse_corotation_options(c->json(), s.source);
     }
-    if (s.coarse.mra.fine_operator == mra::Operator::Step)
-        root.at("coarse")
-            .at("operator")
-            .fail_unless(
-                s.dynamics.has_value(),
-                "\"step\" adapts the hierarchy to one time step, which the scene's \"dynamics\" "
-                "block defines (dt, integrator, damping, mass); add one or use \"stiffness\"");
+    if (auto c = root.find("coarse")) {
+        s.coarse_block = c->json();
+        check_coarse_operator(s, *c);
+    }
 
     std::map<int, material::Material> carried;
-    s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir, &carried);
+    if (given.mesh) {
+        root.fail_unless(!root.has("mesh"), "the mesh is also given directly; remove \"mesh\"");
+        s.mesh = given_mesh(*given.mesh, s.source, "mesh");
+        carried = given.element_materials;
+        root.fail_unless(
+            carried.empty() || carried.size() == static_cast<std::size_t>(s.mesh.num_elements()),
+            "mesh: {} element materials for {} elements", carried.size(), s.mesh.num_elements());
+    } else {
+        s.mesh = parse_mesh(root.at("mesh"), dimension, base_dir, &carried);
+    }
     s.dimension = s.mesh.dim();
     root.fail_unless(!dimension || *dimension == s.dimension, "dimension is {} but the mesh is {}D",
                      dimension.value_or(0), s.dimension);
@@ -354,8 +388,10 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
 
     if (!carried.empty()) {
         root.fail_unless(!root.has("materials") && !root.has("material_field"),
-                         "mesh.file carries one elasticity tensor per element (cell fields "
-                         "C_voigt_IJ and density); remove \"materials\" and \"material_field\"");
+                         "{} one elasticity tensor per element ({} and density); remove "
+                         "\"materials\" and \"material_field\"",
+                         given.mesh ? "the mesh given directly has" : "mesh.file carries",
+                         given.mesh ? "C_mandel or C_voigt" : "cell fields C_voigt_IJ");
         s.materials = std::move(carried);
     }
     if (auto f = root.find("material_field"))
@@ -402,12 +438,39 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     if (auto p = root.find("probes"))
         for (std::size_t i = 0; i < p->array_size(); ++i) s.probes.push_back(p->at(i).vector(dim));
     if (auto c = root.find("coarse"); c && c->has("mesh")) {
-        const JsonReader m = c->at("mesh");
-        s.coarse.mesh = parse_mesh(m, dim, base_dir);
-        m.fail_unless(s.coarse.mesh->dim() == dim, "the coarse mesh is {}D, the scene {}D",
-                      s.coarse.mesh->dim(), dim);
+        c->fail_unless(!given.coarse_mesh,
+                       "the coarse mesh is also given directly; remove "
+                       "\"mesh\"");
+        s.coarse.mesh = coarse_mesh(c->at("mesh"), dim, base_dir);
+    } else if (given.coarse_mesh) {
+        s.coarse.mesh = given_mesh(*given.coarse_mesh, s.source, "coarse.mesh");
+        CG_VERIFY_AS(InvalidScene, s.coarse.mesh->dim() == dim,
+                     "{}: coarse.mesh: the coarse mesh is {}D, the scene {}D", s.source,
+                     s.coarse.mesh->dim(), dim);
     }
     return s;
+}
+
+Scene with_coarse_overrides(Scene s, const json& overrides) {
+    const JsonReader o(overrides, "coarse", s.source);
+    o.require_object();
+    json block = s.coarse_block.is_object() ? s.coarse_block : json::object();
+    for (const auto& [key, value] : overrides.items()) block[key] = value;
+    std::optional<mesh::Mesh> mesh = std::move(s.coarse.mesh);
+    s.coarse = parse_coarse_options(block, s.source);
+    const JsonReader c(block, "coarse", s.source);
+    check_coarse_operator(s, c);
+    s.coarse.mesh =
+        overrides.contains("mesh")
+            ? std::optional<mesh::Mesh>(coarse_mesh(c.at("mesh"), s.dimension, s.base_dir))
+            : std::move(mesh);
+    s.coarse_block = std::move(block);
+    return s;
+}
+
+SparseMatrix mass_matrix(const Scene& scene, const FineModel& model) {
+    return fem::mass_matrix(model.mesh, model.materials,
+                            scene.dynamics ? scene.dynamics->mass : fem::MassType::Consistent);
 }
 
 json parse_json(std::string_view text, const std::string& source) {

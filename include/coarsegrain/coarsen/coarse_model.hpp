@@ -4,6 +4,7 @@
 /// CoarseModel and carries its solution to the fine mesh, so every comparison (the effective
 /// tensors, the material-adapted hierarchy, the naive/Voigt/Reuss baselines) is the same code.
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <variant>
@@ -55,6 +56,9 @@ class FineMap {
     FineMap(Index rows, Index cols, Apply apply);
     Index rows() const { return rows_; }
     Index cols() const { return cols_; }
+    /// The map's matrix if it was given as one (rows() x cols()), nullptr if it is a function
+    /// that applies it without forming it.
+    const SparseMatrix* matrix() const { return matrix_.get(); }
     /// The fine displacement of coarse DOFs u (cols() entries).
     /// @throws Error if u has the wrong size
     Vector apply(const Vector& u) const;
@@ -72,6 +76,7 @@ class FineMap {
 
   private:
     Index rows_ = 0, cols_ = 0;
+    std::shared_ptr<const SparseMatrix> matrix_;
     Apply apply_;
 };
 

@@ -59,6 +59,10 @@ struct Errors {
     double stress_rel = 0;
 };
 
+/// The errors as summary.json writes them: {"energy_rel", "energy_over_load", "l2_rel",
+/// "max_displacement_rel", "compliance_ratio", "stress_rel"}, the members of the same names.
+nlohmann::json errors_json(const Errors& errors);
+
 /// Compares u_c with u on the fine model (both full fine DOF vectors).
 /// @throws Error if sizes disagree or the fine solution is zero
 Errors compare(const scene::FineModel& fine, const Vector& u, const Vector& u_c);

@@ -37,6 +37,12 @@ public:
     using Error::Error;
 };
 
+/// A computation stopped because request_interrupt() was called (progress.hpp, Phase).
+class Interrupted : public Error {
+public:
+    using Error::Error;
+};
+
 namespace detail {
 template <class E = Error>
 [[noreturn]] void fail(const std::string& message) {

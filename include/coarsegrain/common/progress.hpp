@@ -25,12 +25,22 @@ private:
 void set_progress_enabled(bool enabled);
 bool progress_enabled();
 
+/// Asks every computation running in this process to stop at its next phase boundary: from now
+/// on, a Phase that starts outside an OpenMP parallel region throws Interrupted, until
+/// clear_interrupt(). (The Python module calls it on Ctrl-C.)
+void request_interrupt();
+/// Lets phases start again.
+void clear_interrupt();
+bool interrupt_requested();
+
 /// Times one phase (RAII). If the phase is still running after one second, a line
 /// "coarsegrain: <phase> ..." goes to stderr, and "coarsegrain: <phase> done in 2.31 s" when it
 /// ends; phases shorter than a second print nothing. The time is added to `timings` (if given)
 /// when the phase ends or stop() is called.
 class Phase {
 public:
+    /// @throws Interrupted if an interrupt is requested (request_interrupt) and the phase does
+    ///         not start inside an OpenMP parallel region
     Phase(std::string name, Timings* timings = nullptr);
     ~Phase();
     Phase(const Phase&) = delete;

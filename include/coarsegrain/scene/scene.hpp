@@ -91,6 +91,21 @@ struct Scene {
     bool rs_warp = false;
     /// Folder that relative file names in the scene are resolved against.
     std::string base_dir;
+    /// The "coarse" block as written (null if absent), for with_coarse_overrides.
+    nlohmann::json coarse_block;
+};
+
+/// Meshes given directly instead of the scene's "mesh" and "coarse.mesh" keys (the Python
+/// module builds them from arrays). The scene JSON must then leave out the key it replaces.
+struct GivenMeshes {
+    /// Replaces "mesh"; checked with mesh::validate.
+    std::optional<mesh::Mesh> mesh;
+    /// One material per element of `mesh` (ids 0..#E-1, which mesh.material_ids must hold), as a
+    /// .vtu mesh file can carry them; the scene may then have no "materials" or
+    /// "material_field". Empty: the scene's materials apply.
+    std::map<int, material::Material> element_materials;
+    /// Replaces "coarse.mesh"; checked with mesh::validate.
+    std::optional<mesh::Mesh> coarse_mesh;
 };
 
 /// Parses and validates a "coarse" block's options, all but coarse.mesh (null: defaults).
@@ -117,8 +132,18 @@ nlohmann::json parse_json(std::string_view text, const std::string& source);
 /// @throws InvalidScene / MeshReadError / Error naming the file and key
 Scene load_scene(const std::string& file);
 
-/// Validates a scene given as JSON. `base_dir` resolves relative file names.
-Scene parse_scene(const nlohmann::json& j, const std::string& source, const std::string& base_dir);
+/// Validates a scene given as JSON. `base_dir` resolves relative file names. `given` (optional)
+/// holds meshes that replace the "mesh" / "coarse.mesh" keys, which j must then leave out.
+/// @throws InvalidScene / MeshReadError / Error naming `source` and the key
+Scene parse_scene(const nlohmann::json& j, const std::string& source, const std::string& base_dir,
+                  const GivenMeshes& given = {});
+
+/// The scene with keys of its "coarse" block replaced or added: each key of `overrides` (a JSON
+/// object, e.g. {"levels": 2, "refinement": "dirac"}) replaces the block's, and the block is
+/// validated again as when the scene was loaded. A "mesh" key is read as the scene's
+/// coarse.mesh (relative to base_dir); without it the scene's coarse mesh is kept.
+/// @throws InvalidScene naming coarse.<key> and the scene's source
+Scene with_coarse_overrides(Scene scene, const nlohmann::json& overrides);
 
 /// The fine FEM model of a scene: mesh, materials, stiffness, load and Dirichlet conditions.
 struct FineModel {
@@ -133,6 +158,10 @@ struct FineModel {
     /// summary.json's "warnings".
     std::vector<std::string> warnings;
 };
+
+/// The fine model's mass matrix (num_dofs square, fem::mass_matrix): lumped or consistent as the
+/// scene's dynamics.mass says, consistent without a "dynamics" block.
+SparseMatrix mass_matrix(const Scene& scene, const FineModel& model);
 
 /// The scene's Dirichlet boxes on `mesh`: the nodes inside each box, all components fixed at
 /// its value (a later box wins on shared nodes). `what` names the mesh in errors ("mesh",

@@ -1,0 +1,100 @@
+"""Long calls release the GIL and stop on Ctrl-C."""
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+
+import pytest
+
+import coarsegrain as cg
+
+# A call of about 4 s (the demo beam at scale 0.67, 32 x 8 x 8 hexes, the 3-level hierarchy),
+# most of it in two phases of its second level: "Z and C adapted" (about 2 s, from 0.2 s on)
+# and "A" (about 1.6 s).
+SCENE = "cg.scene_from_dict(cg.demo_scene(0.67))"
+METHOD = "mra-linear"
+
+
+def test_ctrl_c_stops_a_long_call():
+    child = textwrap.dedent(f"""
+        import sys, time
+        import coarsegrain as cg
+        scene = {SCENE}
+        print("start", flush=True)
+        t = time.perf_counter()
+        try:
+            cg.coarsen(scene, {METHOD!r})
+            print("finished", time.perf_counter() - t, flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", time.perf_counter() - t, flush=True)
+    """)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    p = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True,
+                         env=env)
+    assert p.stdout.readline().strip() == "start"
+    time.sleep(0.3)
+    p.send_signal(signal.SIGINT)
+    out, _ = p.communicate(timeout=120)
+    word, seconds = out.split()
+    assert word == "interrupted", out
+    # Ctrl-C 0.3 s in lands in "Z and C adapted", which finishes; "A" and the rest never
+    # start: the call ends at about 55% of its whole time (80% leaves room for noise)
+    full = timed_call()
+    assert float(seconds) < 0.8 * full, (seconds, full)
+
+
+def timed_call():
+    scene = eval(SCENE)
+    t = time.perf_counter()
+    cg.coarsen(scene, METHOD)
+    return time.perf_counter() - t
+
+
+def test_the_gil_is_released():
+    """Another Python thread runs while coarsen() computes: it counts far more often than a
+    thread that only gets the GIL at the call's end would (once)."""
+    scene = eval(SCENE)
+    done = threading.Event()
+    ticks = []
+
+    def count():
+        while not done.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.01)
+
+    t = threading.Thread(target=count)
+    start = time.perf_counter()
+    t.start()
+    cg.coarsen(scene, METHOD)
+    end = time.perf_counter()
+    done.set()
+    t.join()
+    during = [x for x in ticks if start + 0.1 < x < end - 0.1]
+    # 10 ms sleeps over the call: at least a quarter of the possible ticks
+    assert len(during) >= 0.25 * (end - start - 0.2) / 0.01, (len(during), end - start)
+
+
+def test_threads_share_a_fine_model():
+    """Two threads coarsen with one FineModel at once: the second waits for the first's fine
+    solve (without holding the GIL, which the first needs to finish) and reuses it."""
+    scene = cg.scene_from_dict(cg.demo_scene(0.25))
+    fine = cg.build_fine_model(scene)
+    results = {}
+
+    def run(method):
+        results[method] = cg.coarsen(scene, method, fine=fine)
+
+    threads = [threading.Thread(target=run, args=(m,)) for m in ("naive", "reuss")]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=60)
+    assert not any(t.is_alive() for t in threads), "deadlock"
+    for method, r in results.items():
+        alone = cg.coarsen(scene, method)
+        # the same computation on the same data: round-off of the solvers' reductions
+        for key, value in alone.errors.items():
+            assert r.errors[key] == pytest.approx(value, rel=1e-9), (method, key)
