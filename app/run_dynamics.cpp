@@ -703,7 +703,7 @@ void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
                     e["errors"]["trajectory_l2_rel"].get<double>(), lag_text(e).c_str());
     }
     std::printf(
-        "  (solves: factorizations per step, Newton iterations when corotated; speedup: per "
+        "  (solves: linear solves per step, Newton iterations when corotated; speedup: per "
         "saved frame, steps and warp; lag p0: the coarse model's last upward crossing of probe "
         "0's mean minus the fine model's, in time units; + is late)\n");
 }
