@@ -20,14 +20,15 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
     const scene::FineModel model = scene::build_fine_model(sc, &t);
     print_warnings(model.warnings);
     const bool corotated = sc.kinematics == sim::Kinematics::Corotational;
-    scene::StaticSolution sol = corotated ? scene::solve_corotated(model, sc, &t)
-                                          : scene::solve_static(model, sc.solver, &t);
+    scene::StaticSolution sol = corotated
+                                    ? scene::solve_corotated(model, sc, &t)
+                                    : scene::solve_static(model, scene::fine_solver(sc, model), &t);
     const bool warped = sc.rs_warp && !corotated;
     std::optional<double> linear_max_u;
     if (warped) {
         linear_max_u = nodal_magnitude(sol.u, model.mesh.dim()).maxCoeff();
         const Phase phase("warp", &t);
-        sol.u = fem::RsWarp(model.mesh, model.bc, sc.solver)(sol.u);
+        sol.u = fem::RsWarp(model.mesh, model.bc, scene::direct_solver(sc))(sol.u);
     }
     const int dim = model.mesh.dim();
     const std::vector<Eigen::VectorXd> probes = scene::probe_displacements(sc, model.mesh, sol.u);

@@ -18,9 +18,10 @@ void solve_fine(const scene::Scene& sc, FineRun& f, const std::vector<std::strin
     if (sc.kinematics == sim::Kinematics::Corotational) {
         f.solution = scene::solve_corotated(f.model, sc, &f.timings);
         const Phase phase("linear solve", &f.timings);
-        f.linear = scene::solve_static(f.model, sc.solver, nullptr, keep);
+        f.linear = scene::solve_static(f.model, scene::fine_solver(sc, f.model), nullptr, keep);
     } else {
-        f.solution = scene::solve_static(f.model, sc.solver, &f.timings, keep);
+        f.solution =
+            scene::solve_static(f.model, scene::fine_solver(sc, f.model), &f.timings, keep);
     }
     if (sc.rs_warp && sc.kinematics == sim::Kinematics::Linear) {
         f.linear = f.solution;
@@ -34,7 +35,8 @@ void solve_fine(const scene::Scene& sc, FineRun& f, const std::vector<std::strin
 const fem::RsWarp& fine_warp(const scene::Scene& sc, FineRun& f) {
     if (!f.warp) {
         const Phase phase("warp", &f.timings);
-        f.warp = std::make_shared<const fem::RsWarp>(f.model.mesh, f.model.bc, sc.solver);
+        f.warp =
+            std::make_shared<const fem::RsWarp>(f.model.mesh, f.model.bc, scene::direct_solver(sc));
     }
     return *f.warp;
 }
@@ -46,8 +48,8 @@ bool solves_corotated(const CoarseModel& model, const scene::Scene& sc) {
 CoarseSolution solve_coarse_for_scene(const CoarseModel& model, const scene::Scene& sc,
                                       Timings* timings) {
     return solves_corotated(model, sc)
-               ? solve_coarse_corotated(model, sc.corotation, sc.solver, timings)
-               : solve_coarse(model, sc.solver, timings);
+               ? solve_coarse_corotated(model, sc.corotation, scene::direct_solver(sc), timings)
+               : solve_coarse(model, scene::direct_solver(sc), timings);
 }
 
 void warp_coarse_solution(CoarseSolution& s, const scene::Scene& sc, FineRun& f, Timings* timings) {

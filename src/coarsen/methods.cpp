@@ -79,7 +79,7 @@ void validate_method(const scene::Scene& scene, const std::string& method) {
 
 bool uses_fine_factorization(const scene::Scene& scene, const scene::FineModel& fine,
                              const std::vector<std::string>& methods) {
-    if (scene.solver.backend == solve::Backend::ConjugateGradient) return false;
+    if (solve::is_iterative(scene.solver.backend)) return false;
     const Index free_dofs = fine.K.rows() - static_cast<Index>(fine.bc.dofs.size());
     return std::any_of(methods.begin(), methods.end(), [&](const std::string& method) {
         if (method == "effective-tensor")

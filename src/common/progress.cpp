@@ -20,6 +20,11 @@ std::mutex g_print;
 
 void set_progress_enabled(bool enabled) { g_progress = enabled; }
 bool progress_enabled() { return g_progress; }
+void progress_line(const std::string& text) {
+    if (!progress_enabled()) return;
+    const std::lock_guard<std::mutex> lock(g_print);
+    std::fprintf(stderr, "coarsegrain: %s\n", text.c_str());
+}
 void request_interrupt() { g_interrupt = true; }
 void clear_interrupt() { g_interrupt = false; }
 bool interrupt_requested() { return g_interrupt; }

@@ -21,6 +21,7 @@
 #include "coarsegrain/material/material_field.hpp"
 #include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/mesh/point_locator.hpp"
+#include "coarsegrain/mra/preconditioner.hpp"
 #include "json_reader.hpp"
 
 namespace coarsegrain::scene {
@@ -306,6 +307,75 @@ mesh::Mesh coarse_mesh(const JsonReader& m, int dim, const std::string& base_dir
 
 }  // namespace
 
+namespace {
+
+/// solver.tolerance of mra-pcg unless given: the relative residual at which the fine solve
+/// agrees with CHOLMOD's to about 1e-8 (tests/solve/test_mra_pcg.cpp).
+constexpr double kIterativeTolerance = 1e-8;
+
+/// The "solver" block: backend, tolerance, and the iterative backends' limits and mra-pcg's
+/// hierarchy (Scene::preconditioner).
+void parse_solver(const JsonReader& sv, Scene& s) {
+    sv.allow_only({"backend", "tolerance", "max_iterations", "time_limit", "levels", "radius",
+                   "smoother_degree"});
+    if (auto b = sv.find("backend")) {
+        try {
+            s.solver.backend = solve::parse_backend(b->string());
+        } catch (const Error& e) {
+            b->fail("{}", e.what());
+        }
+    }
+    const bool iterative = solve::is_iterative(s.solver.backend);
+    const bool pcg = s.solver.backend == solve::Backend::MraPcg;
+    if (pcg) s.solver.cg_tolerance = kIterativeTolerance;
+    if (auto t = sv.find("tolerance")) {
+        s.solver.cg_tolerance = t->positive();
+        t->fail_unless(s.solver.cg_tolerance < 1, "expected a relative residual in (0, 1), got {}",
+                       s.solver.cg_tolerance);
+    }
+    const auto only_iterative = [&](const char* key) {
+        auto v = sv.find(key);
+        if (v) v->fail_unless(iterative, "applies to the iterative backends (cg, mra-pcg) only");
+        return v;
+    };
+    const auto only_pcg = [&](const char* key) {
+        auto v = sv.find(key);
+        if (v) v->fail_unless(pcg, "applies to the mra-pcg backend only");
+        return v;
+    };
+    if (auto v = only_iterative("max_iterations"))
+        s.solver.cg_max_iterations = static_cast<int>(v->integer(1, 1000000000));
+    if (auto v = only_iterative("time_limit")) s.solver.time_limit = v->positive();
+    if (auto v = only_pcg("levels"))
+        s.preconditioner.levels = static_cast<int>(v->integer(2, mra::kMaxLevels));
+    if (auto v = only_pcg("radius")) {
+        s.preconditioner.radius = v->number();
+        v->fail_unless(s.preconditioner.radius >= 1,
+                       "expected a radius >= 1 (rings of the finer grid), got {}",
+                       s.preconditioner.radius);
+    }
+    if (auto v = only_pcg("smoother_degree"))
+        s.preconditioner.smoother_degree = static_cast<int>(v->integer(1, 10));
+}
+
+/// mra-pcg solves the linear fine model of a grid whose cells halve: checked before any work.
+void check_mra_pcg(const Scene& s, const JsonReader& sv) {
+    const JsonReader backend = sv.at("backend");
+    backend.fail_unless(s.mesh.grid.has_value(),
+                        "mra-pcg needs a fine mesh that is a regular grid (a \"grid\" mesh "
+                        "block); this mesh is not one");
+    backend.fail_unless(s.kinematics == sim::Kinematics::Linear,
+                        "mra-pcg solves linear fine models; corotated kinematics factorize their "
+                        "tangents (use cholmod)");
+    try {
+        mra::preconditioner_levels(s.mesh.grid->cells, s.mesh.dim(), s.preconditioner);
+    } catch (const Error& e) {
+        (sv.has("levels") ? sv.at("levels") : backend).fail("{}", e.what());
+    }
+}
+
+}  // namespace
+
 Scene parse_scene(const json& j, const std::string& source, const std::string& base_dir,
                   const GivenMeshes& given) {
     Scene s;
@@ -324,17 +394,7 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
         p->fail_unless(mode == "strain" || mode == "stress", "expected \"strain\" or \"stress\"");
         s.plane = mode == "strain" ? material::PlaneMode::Strain : material::PlaneMode::Stress;
     }
-    if (auto sv = root.find("solver")) {
-        sv->allow_only({"backend", "tolerance"});
-        if (auto b = sv->find("backend")) {
-            try {
-                s.solver.backend = solve::parse_backend(b->string());
-            } catch (const Error& e) {
-                b->fail("{}", e.what());
-            }
-        }
-        if (auto t = sv->find("tolerance")) s.solver.cg_tolerance = t->positive();
-    }
+    if (auto sv = root.find("solver")) parse_solver(*sv, s);
     if (auto f = root.find("fem")) {
         f->allow_only({"formulation"});
         if (auto v = f->find("formulation")) {
@@ -378,6 +438,7 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
     s.dimension = s.mesh.dim();
     root.fail_unless(!dimension || *dimension == s.dimension, "dimension is {} but the mesh is {}D",
                      dimension.value_or(0), s.dimension);
+    if (s.solver.backend == solve::Backend::MraPcg) check_mra_pcg(s, root.at("solver"));
     const int dim = s.dimension;
     if (auto v = root.find("fem"); v && v->has("formulation"))
         v->at("formulation")
@@ -553,6 +614,18 @@ Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
         f += fem::traction_load(mesh, boundary, facets, c.value);
     }
     return f;
+}
+
+solve::SolverOptions fine_solver(const Scene& scene, const FineModel& model) {
+    solve::SolverOptions o = scene.solver;
+    if (o.backend == solve::Backend::MraPcg)
+        o.preconditioner =
+            mra::hierarchy_preconditioner(model.mesh, model.bc.dofs, scene.preconditioner);
+    return o;
+}
+
+solve::SolverOptions direct_solver(const Scene& scene) {
+    return scene.solver.backend == solve::Backend::MraPcg ? solve::SolverOptions{} : scene.solver;
 }
 
 FineModel build_fine_model(const Scene& scene, Timings* timings) {

@@ -505,14 +505,20 @@ std::string backend_name(Backend b) {
             return "ldlt";
         case Backend::ConjugateGradient:
             return "cg";
+        case Backend::MraPcg:
+            return "mra-pcg";
     }
     return "?";
 }
 
+bool is_iterative(Backend b) { return b == Backend::ConjugateGradient || b == Backend::MraPcg; }
+
 Backend parse_backend(const std::string& name) {
-    for (Backend b : {Backend::Cholmod, Backend::SimplicialLDLT, Backend::ConjugateGradient})
+    for (Backend b :
+         {Backend::Cholmod, Backend::SimplicialLDLT, Backend::ConjugateGradient, Backend::MraPcg})
         if (backend_name(b) == name) return b;
-    CG_VERIFY(false, "unknown solver backend '{}': expected one of cholmod, ldlt, cg", name);
+    CG_VERIFY(false, "unknown solver backend '{}': expected one of cholmod, ldlt, cg, mra-pcg",
+              name);
     return Backend::Cholmod;
 }
 
@@ -532,6 +538,7 @@ struct SpdSolver::Impl {
     std::unique_ptr<Ldlt> ldlt;
     std::unique_ptr<Cg> cg;
     SparseMatrix cg_matrix;  // CG keeps a reference to its matrix, so it gets its own copy
+    std::unique_ptr<Preconditioner> preconditioner;  // mra-pcg, of cg_matrix
 
     std::string name() const { return backend_name(options.backend); }
 
@@ -562,6 +569,7 @@ struct SpdSolver::Impl {
             case Backend::SimplicialLDLT:
                 return ldlt->solve(b);
             case Backend::ConjugateGradient:
+            case Backend::MraPcg:
                 break;
         }
         return {};
@@ -617,6 +625,8 @@ SpdSolver::SpdSolver(SolverOptions options) : m_impl(std::make_unique<Impl>()) {
     CG_VERIFY(options.node_dofs >= 1, "solver: node_dofs = {} must be >= 1", options.node_dofs);
     CG_VERIFY(options.cg_max_iterations >= 0,
               "solver: cg_max_iterations = {} must be >= 0 (0: 10 n)", options.cg_max_iterations);
+    CG_VERIFY(options.time_limit >= 0, "solver: time_limit = {} must be >= 0 (0: none)",
+              options.time_limit);
     m_impl->options = options;
 }
 
@@ -677,6 +687,11 @@ void SpdSolver::analyze(const SparseMatrix& A) {
             break;
         case Backend::ConjugateGradient:
             s.cg = std::make_unique<Cg>();
+            break;
+        case Backend::MraPcg:
+            CG_VERIFY(bool(s.options.preconditioner),
+                      "solver (mra-pcg): no preconditioner was given; the backend solves the fine "
+                      "model of a scene on a regular grid");
             break;
     }
     s.analyzed = true;
@@ -742,7 +757,8 @@ void SpdSolver::factorize_analyzed(const SparseMatrix& A) {
             if (!(ratio >= kSuspectPivotRatio)) s.check_numerically_singular(A, ratio);
             break;
         }
-        case Backend::ConjugateGradient: {
+        case Backend::ConjugateGradient:
+        case Backend::MraPcg: {
             // A positive definite matrix has a positive diagonal; CG itself cannot tell.
             const Vector diagonal = A.diagonal();
             Index at = 0;
@@ -751,8 +767,13 @@ void SpdSolver::factorize_analyzed(const SparseMatrix& A) {
                 s.not_positive_definite(
                     fmt::format("diagonal entry {} is {:.3g}, not positive", at, dmin));
             }
+            s.preconditioner.reset();
             s.cg_matrix =
                 s.options.lower_triangle ? SparseMatrix(A.selfadjointView<Eigen::Lower>()) : A;
+            if (s.options.backend == Backend::MraPcg) {
+                s.preconditioner = s.options.preconditioner(s.cg_matrix);
+                break;
+            }
             s.cg->setTolerance(s.options.cg_tolerance);
             s.cg->setMaxIterations(s.options.cg_max_iterations > 0 ? s.options.cg_max_iterations
                                                                    : 10 * s.n);
@@ -786,6 +807,15 @@ Matrix SpdSolver::solve(const Matrix& b) const {
                 "{}",
                 c, s.n, s.cg->error(), s.cg->iterations(), s.options.cg_tolerance, kCgAdvice);
         }
+    } else if (s.options.backend == Backend::MraPcg) {
+        x.resize(b.rows(), b.cols());
+        PcgOptions o;
+        o.tolerance = s.options.cg_tolerance;
+        o.max_iterations = s.options.cg_max_iterations > 0 ? s.options.cg_max_iterations : 1000;
+        o.time_limit = s.options.time_limit;
+        o.name = "solver (mra-pcg)";
+        for (Eigen::Index c = 0; c < b.cols(); ++c)
+            x.col(c) = pcg(s.cg_matrix, b.col(c), *s.preconditioner, o);
     } else {
         x = s.solve_factored(b);
         CG_VERIFY(

@@ -24,6 +24,9 @@ private:
 /// users and tests see nothing unless they ask.
 void set_progress_enabled(bool enabled);
 bool progress_enabled();
+/// Writes "coarsegrain: <text>" to stderr if progress lines are enabled (one line at a time
+/// across threads).
+void progress_line(const std::string& text);
 
 /// Asks every computation running in this process to stop at its next phase boundary: from now
 /// on, a Phase that starts outside an OpenMP parallel region throws Interrupted, until

@@ -195,4 +195,23 @@ struct CompareOptions {
     bool cell_tensors = true;
 };
 
+/// Options of the mra-pcg solver backend's multigrid preconditioner (mra/preconditioner.hpp; the
+/// scene's solver.levels, solver.radius, solver.smoother_degree).
+struct PreconditionerOptions {
+    /// Levels q >= 2 of the hierarchy; 0: the fewest levels whose coarsest grid has at most
+    /// coarsest_dofs DOFs, as far as the cells per axis halve (preconditioner_levels).
+    int levels = 0;
+    /// Largest coarsest level of the automatic choice (DOFs, Dirichlet ones included).
+    Index coarsest_dofs = 20000;
+    /// Localization radius rho of every step (rings of the finer grid, Options::radius).
+    double radius = 1;
+    /// Degree of the Chebyshev smoothing polynomial, before and after the coarse correction.
+    int smoother_degree = 3;
+};
+
+/// Checks the options' ranges: levels 0 or in 2..kMaxLevels, coarsest_dofs >= 1, radius >= 1
+/// (finite), smoother_degree in 1..10.
+/// @throws Error naming the option
+void validate(const PreconditionerOptions& options);
+
 }  // namespace coarsegrain::mra

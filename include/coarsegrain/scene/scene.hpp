@@ -74,7 +74,11 @@ struct Scene {
     std::vector<Eigen::VectorXd> probes;
     /// "fem": {"formulation": ..}: the fine element (default standard; incompatible: hex/quad).
     fem::Formulation formulation = fem::Formulation::Standard;
+    /// "solver": the backend of the fine model's systems and its options (fine_solver); coarse
+    /// models and other systems use direct_solver.
     solve::SolverOptions solver;
+    /// solver.levels, solver.radius, solver.smoother_degree of the mra-pcg backend.
+    mra::PreconditionerOptions preconditioner;
     /// The "coarse" block, parsed and validated (CoarseOptions).
     CoarseOptions coarse;
     /// "dynamics": time stepping of `coarsegrain simulate` (absent: none; simulate requires it).
@@ -180,6 +184,15 @@ Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
 /// Assembles the fine model. Phases "assemble" (stiffness, loads) are added to `timings`.
 /// @throws InvalidScene if a box selects no node/facet, Error on bad elements
 FineModel build_fine_model(const Scene& scene, Timings* timings = nullptr);
+
+/// The solver options of the fine model's systems (its stiffness, step and shifted operators, all
+/// on the DOFs free of the Dirichlet conditions `model.bc`): the scene's, with mra-pcg's
+/// preconditioner bound to the fine grid (mra::hierarchy_preconditioner).
+solve::SolverOptions fine_solver(const Scene& scene, const FineModel& model);
+
+/// The solver options of every other system (coarse models, warps): the scene's, or CHOLMOD's
+/// defaults if the scene's backend is mra-pcg, which solves fine grid models only.
+solve::SolverOptions direct_solver(const Scene& scene);
 
 /// The result of a static solve on the fine model.
 struct StaticSolution {

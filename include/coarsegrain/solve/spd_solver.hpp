@@ -6,6 +6,7 @@
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/types.hpp"
+#include "coarsegrain/solve/pcg.hpp"
 
 namespace coarsegrain::solve {
 
@@ -13,16 +14,16 @@ enum class Backend {
     Cholmod,            ///< CHOLMOD supernodal Cholesky (default)
     SimplicialLDLT,     ///< Eigen SimplicialLDLT
     ConjugateGradient,  ///< Eigen CG with Jacobi preconditioner
+    /// Conjugate gradients (pcg) preconditioned by SolverOptions::preconditioner, which builds
+    /// the preconditioner at factorize (on the fine model of a grid scene: a multigrid cycle
+    /// over the material-adapted hierarchy, mra/preconditioner.hpp).
+    MraPcg,
 };
 
-/// "cholmod", "ldlt", "cg".
+/// "cholmod", "ldlt", "cg", "mra-pcg".
 std::string backend_name(Backend b);
-
-/// Conjugate gradients did not converge (the matrix may be singular or too ill-conditioned).
-class NotConverged : public Error {
-  public:
-    using Error::Error;
-};
+/// Whether the backend iterates (cg, mra-pcg) rather than factorizes.
+bool is_iterative(Backend b);
 
 /// A solver's NotPositiveDefinite or NotConverged message without its guess at the cause (too
 /// few Dirichlet conditions; for cg also the advice to use cholmod), for a caller that has
@@ -33,8 +34,12 @@ Backend parse_backend(const std::string& name);
 
 struct SolverOptions {
     Backend backend = Backend::Cholmod;
-    double cg_tolerance = 1e-12;  ///< relative residual for CG
-    int cg_max_iterations = 0;    ///< 0: 10 * n
+    double cg_tolerance = 1e-12;  ///< relative residual for cg and mra-pcg
+    int cg_max_iterations = 0;    ///< 0: 10 * n (cg), 1000 (mra-pcg)
+    /// mra-pcg: seconds a solve of one right-hand side may take (0: no limit).
+    double time_limit = 0;
+    /// mra-pcg: builds the preconditioner of the factorized matrix (required by mra-pcg).
+    PreconditionerFactory preconditioner;
     /// Unknowns per node when A is interleaved per node (dim for elasticity: x0 y0 z0 x1 ...).
     /// With node_dofs > 1, cholmod computes its fill-reducing ordering on the graph of nodes
     /// (about node_dofs^2 times fewer edges than A; CHOLMOD's AMD and METIS, whichever gives
