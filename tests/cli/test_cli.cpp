@@ -22,6 +22,25 @@ namespace fs = std::filesystem;
 
 using namespace coarsegrain::test;
 
+// `solve` with the iterative fine solver: the probes equal the direct solve's to 1e-8 (the
+// residual is 1e-10; the scene test bounds the error by cond(K_ff) times it), and the summary
+// names the solver.
+TEST(Cli, SolveWithMraPcgMatchesCholmod) {
+    const std::string dir = test::temp_dir("cli_solve_mra_pcg");
+    json j = small_scene();
+    ASSERT_EQ(cli("solve " + write_scene(dir, j, "direct.json") + " --out " + dir + "/a").code, 0);
+    j["solver"] = {{"backend", "mra-pcg"}, {"tolerance", 1e-10}};
+    const Result r = cli("solve " + write_scene(dir, j, "pcg.json") + " --out " + dir + "/b");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const json a = read_json(dir + "/a/summary.json"), b = read_json(dir + "/b/summary.json");
+    EXPECT_EQ(b["solver"], "mra-pcg");
+    for (std::size_t p = 0; p < a["probes"].size(); ++p)
+        for (int d = 0; d < 3; ++d) {
+            const double ua = a["probes"][p]["u"][d], ub = b["probes"][p]["u"][d];
+            EXPECT_NEAR(ub, ua, 1e-8 * a["max_displacement"].get<double>()) << p << " " << d;
+        }
+}
+
 TEST(Cli, SolveWritesSummaryAndVtuWithTheContractKeys) {
     const std::string dir = test::temp_dir("cli_solve");
     const Result r = cli("solve " + write_scene(dir, small_scene()) + " --out " + dir + "/out");
@@ -148,10 +167,10 @@ TEST(CliDemoSlow, ComparesEveryMethodAndWritesTheReport) {
     }
     std::ifstream in(dir + "/report.md");
     const std::string report((std::istreambuf_iterator<char>(in)), {});
-    for (const char* text : {"| method | coarse DOFs", "| mra-dirac |", "![", "(deformed.png)",
-                             "(methods.png)", "(mra_levels.png)", "## Dynamics",
-                             "| model | DOFs | per step s", "(dynamics/trajectory.png)",
-                             "(dynamics/animation.gif)"})
+    for (const char* text :
+         {"| method | coarse DOFs", "| mra-dirac |", "![", "(deformed.png)", "(methods.png)",
+          "(mra_levels.png)", "## Dynamics", "| model | DOFs | per step s",
+          "(dynamics/trajectory.png)", "(dynamics/animation.gif)"})
         EXPECT_THAT(report, HasSubstr(text));
 
     // The dynamic run of the same models: released from rest under gravity, 1.1 time units,
