@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git ccache
   libeigen3-dev libsuitesparse-dev liblapack-dev libopenblas0-pthread nlohmann-json3-dev libcli11-dev libfmt-dev
-  libstb-dev libspectra-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libstb-dev libspectra-dev libgtest-dev libgmock-dev libbenchmark-dev libhypre-dev
   clang libclang-rt-14-dev libomp-dev
   python3 python3-numpy python3-matplotlib calculix-ccx gmsh tetgen
   python3-dev python3-scipy pybind11-dev python3-pybind11 python3-pytest
