@@ -333,7 +333,7 @@ nlohmann::json simulate_built(const scene::Scene& sc, const scene::FineModel& fi
         const auto it = std::find_if(coarse.begin(), coarse.end(),
                                      [&](const BuiltModel& m) { return m.method == method; });
         // Each model is stepped once: it moves into the run (and is freed after it).
-        return coarsen::coarse_dynamics(std::move(it->model), fine, sc);
+        return coarsen::coarse_dynamics(std::move(it->model), fine, sc, method);
     };
     SimulateRun run = simulate_files(sc, fine, methods, source, out_dir, false);
     write_summary(out_dir, run.summary);

@@ -93,7 +93,7 @@ def test_simulate_equals_the_cli(tmp_path, name, make, method):
     assert_same(sim.summary, cli)
     assert sim.timings == sim.summary["timings"]
     if method:
-        assert sim.errors == sim.summary["errors"]
+        assert sim.errors == sim.summary["errors"] and sim.speedup == sim.summary["speedup"]
         assert set(sim.errors) == {"trajectory_l2_rel", "probe_max_rel", "phase"}
         assert sim.coarse.coarse_model.num_dofs == cli["coarse"]["dofs"]
     else:
@@ -187,6 +187,7 @@ def test_modes_are_mass_normalized_eigenpairs_paired_by_mac():
     assert np.linalg.norm(R, axis=0).max() < 1e-5 * np.linalg.norm((K @ Phi)[free], axis=0).min()
     np.testing.assert_allclose(m.frequencies_hz, np.sqrt(m.eigenvalues) / (2 * np.pi), rtol=1e-12)
     c = m.coarse
+    np.testing.assert_allclose(c.frequencies_hz, np.sqrt(c.eigenvalues) / (2 * np.pi), rtol=1e-12)
     np.testing.assert_allclose(c.shapes_fine, c.coarse_model.to_fine @ c.shapes, rtol=1e-12,
                                atol=1e-12 * np.abs(c.shapes_fine).max())
     for i in range(5):

@@ -336,12 +336,12 @@ const fem::RsWarp& fine_warp(const scene::Scene& sc, FineDynamics& fine) {
     return *fine.warp;
 }
 
-CoarseDynamics coarse_dynamics(CoarseModel model, const FineDynamics& fine,
-                               const scene::Scene& sc) {
+CoarseDynamics coarse_dynamics(CoarseModel model, const FineDynamics& fine, const scene::Scene& sc,
+                               const std::string& method) {
     CoarseDynamics c;
     c.model = std::move(model);
     CG_VERIFY(static_cast<bool>(c.model.mass), "{}: method {} defines no coarse mass", sc.source,
-              c.model.method);
+              method);
     c.timings.add("build", sum(c.model.timings));
     const Phase phase("mass", &c.timings);
     c.M = c.model.mass(fine.M);
@@ -350,7 +350,7 @@ CoarseDynamics coarse_dynamics(CoarseModel model, const FineDynamics& fine,
 
 CoarseDynamics build_coarse_dynamics(const scene::Scene& sc, const FineDynamics& fine,
                                      const std::string& method) {
-    return coarse_dynamics(build_coarse_model(sc, fine.model, method), fine, sc);
+    return coarse_dynamics(build_coarse_model(sc, fine.model, method), fine, sc, method);
 }
 
 void check_dynamics(const scene::Scene& sc) {

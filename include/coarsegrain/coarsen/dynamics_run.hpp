@@ -48,10 +48,11 @@ struct CoarseDynamics {
     Timings timings;
 };
 
-/// A built coarse model with its mass for the fine model's (phases "build" and "mass").
-/// @throws Error naming the scene's source if the method defines no coarse mass
+/// The coarse model built for `method` with its mass for the fine model's (phases "build" and
+/// "mass").
+/// @throws Error naming the scene's source and the method if it defines no coarse mass
 CoarseDynamics coarse_dynamics(CoarseModel model, const FineDynamics& fine,
-                               const scene::Scene& scene);
+                               const scene::Scene& scene, const std::string& method);
 
 /// Builds the method's coarse model (build_coarse_model) with its mass (coarse_dynamics).
 /// @throws as build_coarse_model, coarse_dynamics
