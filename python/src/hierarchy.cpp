@@ -190,12 +190,18 @@ n_k = len(dofs) DOFs; n_{k+1} those of level k+1 (len(fine_dofs) for k = q-1); w
             "(a new scipy.sparse.csc_matrix: the hierarchy keeps it by runs).")
         .def_property_readonly(
             "A",
-            [](const PyLevel& l) { return owned_sparse(mra::symmetric_from_lower(l.level().A)); },
+            [](const PyLevel& l) {
+                return owned_sparse(
+                    run_interruptible([&] { return mra::symmetric_from_lower(l.level().A); }));
+            },
             "A^k = C̃^k A^{k+1} C̃^{k,T} (Alg. 1 line 7): n_k square, both triangles (a new "
             "scipy.sparse.csc_matrix: the hierarchy keeps its lower triangle).")
         .def_property_readonly(
             "B",
-            [](const PyLevel& l) { return owned_sparse(mra::symmetric_from_lower(l.level().B)); },
+            [](const PyLevel& l) {
+                return owned_sparse(
+                    run_interruptible([&] { return mra::symmetric_from_lower(l.level().B); }));
+            },
             "B^k = W^k A^{k+1} W^{k,T} (Alg. 1 line 2), the wavelet stiffness: w_k square, both "
             "triangles (a new scipy.sparse.csc_matrix).")
         .def_property_readonly(
