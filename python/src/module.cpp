@@ -1,10 +1,14 @@
 // coarsegrain._core: the C++ side of the Python module (python/coarsegrain/__init__.py wraps it).
+// This file binds scenes, fine and coarse models and coarsen(); hierarchy.cpp the mra methods'
+// hierarchy, dynamics.cpp simulate() and modes(); bindings.hpp holds what they share.
 //
 // Arrays: matrices and vectors the C++ objects own are handed out as read-only NumPy views (and
 // scipy.sparse matrices over such views) that keep their Python owner alive, without copying.
 // Copies are made where the layouts differ: the arrays that build a scene's mesh (NumPy's
 // row-major nodes into Eigen's column-major matrix), a coarse mass (computed on request), the
-// per-element tensors (gathered from the material table) and vectors a function returns.
+// per-element tensors (gathered from the material table) and vectors a function returns;
+// to_fine @ U of the hierarchy's operator copies U into column-major order, and its result is
+// taken over without a copy.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
