@@ -1,7 +1,5 @@
 #include "output.hpp"
 
-#include <sys/resource.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,22 +11,8 @@
 
 namespace coarsegrain::app {
 
-double peak_rss_mb() {
-    rusage r{};
-    getrusage(RUSAGE_SELF, &r);
-    return static_cast<double>(r.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
-
-std::vector<double> to_std(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
-
 Vector nodal_magnitude(const Vector& u, int dim) {
     return Eigen::Map<const Matrix>(u.data(), dim, u.size() / dim).colwise().norm().transpose();
-}
-
-nlohmann::json timings_json(const Timings& timings) {
-    nlohmann::json j = nlohmann::json::object();
-    for (const auto& [phase, seconds] : timings.entries()) j[phase] = seconds;
-    return j;
 }
 
 io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u) {
@@ -63,15 +47,6 @@ nlohmann::json newton_json(const sim::NewtonReport& report, const sim::Corotatio
 
 void print_warnings(const std::vector<std::string>& warnings) {
     for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-}
-
-nlohmann::json fine_sizes(const scene::FineModel& model) {
-    return {{"nodes", model.mesh.num_nodes()},
-            {"elements", model.mesh.num_elements()},
-            {"element", mesh::element_name(model.mesh.type)},
-            {"dofs", model.mesh.num_dofs()},
-            {"free_dofs", model.mesh.num_dofs() - static_cast<Index>(model.bc.dofs.size())},
-            {"nonzeros", model.K.nonZeros()}};
 }
 
 nlohmann::json probes_json(const scene::Scene& scene, const std::vector<Eigen::VectorXd>& u,

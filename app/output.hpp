@@ -5,29 +5,24 @@
 #include <string>
 #include <vector>
 
+#include "coarsegrain/coarsen/summary_json.hpp"
 #include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/io/vtu.hpp"
 #include "coarsegrain/scene/scene.hpp"
 
 namespace coarsegrain::app {
 
-/// Peak resident memory of this process in MB.
-double peak_rss_mb();
-
-std::vector<double> to_std(const Eigen::VectorXd& v);
+using coarsen::fine_sizes;
+using coarsen::peak_rss_mb;
+using coarsen::timings_json;
+using coarsen::to_std;
 
 /// Per-node |u| of an interleaved displacement.
 Vector nodal_magnitude(const Vector& u, int dim);
 
-/// {"phase": seconds, ...} in the order the phases ran.
-nlohmann::json timings_json(const Timings& timings);
-
 /// Displacement, its magnitude, E, stress and strain (physical components: xx yy zz yz xz xy,
 /// or xx yy xy in 2D) and von Mises stress of a fine-mesh displacement.
 io::VtuFields solution_fields(const scene::FineModel& model, const Vector& u);
-
-/// The fine static problem's sizes for summary.json "fine".
-nlohmann::json fine_sizes(const scene::FineModel& model);
 
 /// The corotated solve's figures for summary.json "newton": the frame, tolerance, iterations,
 /// increments, bisections, final residual and each iteration's load factor, residual and step.

@@ -10,7 +10,9 @@
 namespace coarsegrain::app {
 
 /// `coarsegrain simulate`: steps the scene's "dynamics" on the fine model and on the coarse model
-/// of each method (carried to the fine mesh frame by frame) and compares the trajectories.
+/// of each method (carried to the fine mesh frame by frame) and compares the trajectories. The
+/// run is coarsen::simulate_models, its summary coarsen::simulate_summary (as the Python
+/// module's simulate()); this writes their files.
 ///
 /// Files in DIR: fine.pvd with fine/frame_NNNNN.vtu, and <method>.pvd with
 /// <method>/frame_NNNNN.vtu per method (ParaView time series: displacement, its magnitude and,
@@ -72,7 +74,8 @@ void print_simulate_table(const scene::Scene& scene, const nlohmann::json& summa
 /// `coarsegrain modes`: the `count` lowest natural frequencies and modes of the fine model and
 /// of each method's coarse model (K φ = ω² M φ; the fine mass is dynamics.mass, consistent
 /// without a "dynamics" block), the coarse modes carried to the fine mesh and paired with the
-/// fine ones by the modal assurance criterion.
+/// fine ones by the modal assurance criterion. The run is coarsen::modes_models, its summary
+/// coarsen::modes_summary (as the Python module's modes()); this writes their files.
 ///
 /// Files in DIR: mode_NN.vtu per fine mode (its shape "mode", and "mode_<method>" the paired
 /// coarse mode of each method), frequencies.csv and frequencies.png

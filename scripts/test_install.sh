@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Tests the installed package: installs a build (default build/release) into a temporary prefix,
-# moves the prefix (an install must not depend on where it was made), builds and runs
+# moves the prefix (an install must not depend on where it was made), imports the Python package
+# it installed (COARSEGRAIN_INSTALL_PYTHONDIR), builds and runs
 # tests/install/consumer against it with find_package(coarsegrain), and runs the installed
 # `coarsegrain demo --scale 0.25`, whose pictures must come from the installed plotting scripts;
 # then installs the Python module with `pip install --no-build-isolation .` into a virtual
@@ -43,6 +44,23 @@ for f in bin/coarsegrain lib/libcoarsegrain.a include/coarsegrain/scene/scene.hp
          lib/cmake/coarsegrain/coarsegrainTargets.cmake lib/cmake/coarsegrain/FindCHOLMOD.cmake; do
   [ -e "$prefix/$f" ] || fail "the install has no $f"
 done
+# The Python package, where COARSEGRAIN_INSTALL_PYTHONDIR says (relative: under the prefix).
+pydir=$(sed -n 's/^COARSEGRAIN_INSTALL_PYTHONDIR:PATH=//p' "$build/CMakeCache.txt")
+case "$pydir" in
+  "") fail "$build has no COARSEGRAIN_INSTALL_PYTHONDIR (configured without the Python module?)" ;;
+  /*) pyroot=$pydir ;;
+  *) pyroot=$prefix/$pydir ;;
+esac
+[ -f "$pyroot/coarsegrain/__init__.py" ] || fail "the install has no $pyroot/coarsegrain/__init__.py"
+compgen -G "$pyroot/coarsegrain/_core*.so" >/dev/null ||
+  fail "the install has no extension $pyroot/coarsegrain/_core*.so"
+(cd "$tmp" && env -u PYTHONPATH PYTHONPATH="$pyroot" /usr/bin/python3 -c '
+import os, numpy, coarsegrain as cg
+assert cg.__file__.startswith(os.environ["PYTHONPATH"]), cg.__file__
+m = cg.coarsen(cg.scene_from_dict(cg.demo_scene(0.25)), "mra").coarse_model
+U = m.to_fine @ numpy.ones((m.num_dofs, 2))
+assert U.shape == (m.to_fine.shape[0], 2), U.shape
+') || fail "the Python package installed in $pyroot"
 if grep -qF "$root/scripts" "$prefix/bin/coarsegrain"; then
   fail "the installed binary names the source tree's scripts folder $root/scripts"
 fi

@@ -27,8 +27,10 @@ from ._core import (  # noqa: F401  (re-exported)
     CoarsenResult,
     Error,
     FineModel,
+    Hierarchy,
     Interrupted,
     InvalidScene,
+    Level,
     MeshReadError,
     NewtonFailed,
     NotConverged,
@@ -45,10 +47,11 @@ from ._core import (  # noqa: F401  (re-exported)
 from . import _core
 
 __all__ = [
-    "CoarseModel", "CoarsenResult", "Error", "FineModel", "Interrupted", "InvalidScene",
-    "MeshReadError", "NewtonFailed", "NotConverged", "NotPositiveDefinite", "Scene",
-    "SingularMatrix", "StaticSolution", "build_fine_model", "coarsen", "demo_scene",
-    "directional_young", "load_scene", "method_names", "scene_from_dict", "solve_static",
+    "CoarseModel", "CoarsenResult", "Error", "FineModel", "Hierarchy", "Interrupted",
+    "InvalidScene", "Level", "MeshReadError", "ModeComparison", "Modes", "NewtonFailed",
+    "NotConverged", "NotPositiveDefinite", "Run", "Scene", "Simulation", "SingularMatrix",
+    "StaticSolution", "build_fine_model", "coarsen", "demo_scene", "directional_young",
+    "load_scene", "method_names", "modes", "scene_from_dict", "simulate", "solve_static",
     "to_fine",
 ]
 
@@ -170,8 +173,9 @@ def solve_static(model):
 
 class _FineMapOperator:
     """The map from coarse to fine DOFs of a model that never forms it (the hierarchy's
-    Φ^{1,T} S, applied level by level): ``to_fine @ u`` for a coarse vector u, or for each
-    column of a #coarse x k array."""
+    Φ^{1,T} S, applied level by level): ``to_fine @ u`` for a coarse vector u (#fine), or
+    for each column of a #coarse x k array U (#fine x k, all columns in one call without the
+    GIL). Raises Error naming the expected shape if u or U has the wrong number of rows."""
 
     def __init__(self, model):
         self._model = model
@@ -183,9 +187,7 @@ class _FineMapOperator:
         if u.ndim == 1:
             return self._model._apply_to_fine(u)
         if u.ndim == 2:
-            return _np.column_stack([self._model._apply_to_fine(u[:, j])
-                                     for j in range(u.shape[1])]) \
-                if u.shape[1] else _np.zeros((self.shape[0], 0))
+            return self._model._apply_to_fine_columns(u)
         raise ValueError(f"to_fine @ u: expected a vector or a matrix, got shape {u.shape}")
 
     def dot(self, u):
@@ -206,3 +208,168 @@ CoarseModel.to_fine = property(to_fine, doc="""The map from coarse DOFs to the f
 u_fine = to_fine @ u: a scipy.sparse.csc_matrix (effective tensors, baselines; read-only, no
 copy), or for the hierarchy (mra) an operator with ``@`` and ``.shape`` that applies it without
 forming it.""")
+
+
+def _method_name(method):
+    if method is not None and not isinstance(method, str):
+        raise TypeError("one method at a time (or None for the fine model alone); call it once "
+                        "per method")
+    return method
+
+
+class Run:
+    """One model's run of a Simulation, on the fine mesh (T saved times, P probes, n fine DOFs).
+
+    - ``probes``: T x P x dim displacements at the scene's probes;
+    - ``frames``: T x n displacements on the fine mesh (a coarse model's carried there, post-warped
+      as the scene asks), ``frames[i]`` at ``times[i]``; None if simulate(frames=False);
+    - ``coarse_frames`` (a method's run): T x #coarse DOFs, the coarse model's own DOFs;
+    - ``coarse_model`` (a method's run): the CoarseModel that was stepped;
+    - ``entry``: the run's part of the summary (a method: the CLI's method keys; the linear fine
+      model: summary["fine"]["linear"]).
+    """
+
+    def __init__(self, arrays, entry):
+        self.probes = arrays["probes"]
+        self.frames = arrays["frames"]
+        self.coarse_frames = arrays.get("coarse_frames")
+        self.coarse_model = arrays.get("coarse_model")
+        self.entry = entry
+
+    def __repr__(self):
+        return f"<coarsegrain.Run {self.probes.shape[0]} frames>"
+
+
+class Simulation:
+    """The result of simulate(): the CLI's `coarsegrain simulate` without its files.
+
+    - ``times``: the T saved times (t = 0 and every output_every-th step);
+    - ``fine``: the fine model's Run (``frames`` are the fine displacements);
+    - ``fine_linear``: with corotational kinematics, the linear fine model's Run beside it
+      (summary["fine"]["linear"]); else None;
+    - ``coarse``: the method's Run (None without a method);
+    - ``summary``: the CLI's summary.json for the same scene and method, but the keys of its
+      files ("plots", "animation_frames", "pvd"), with the same keys and values (the timings
+      are this run's: their phases but "read" and "animation");
+    - ``timings``: summary["timings"] ({"fine": ...} and with a method {"coarse": ...});
+    - ``errors``: summary["errors"] with a method ("trajectory_l2_rel", "probe_max_rel",
+      "phase"), None without;
+    - ``speedup``: summary["speedup"] with a method, None without;
+    - ``fine_model``: the FineModel that was stepped.
+    """
+
+    def __init__(self, d, method):
+        self.method = method
+        self.summary = d["summary"]
+        self.times = d["times"]
+        self.fine_model = d["fine_model"]
+        self.fine = Run(d["fine"], self.summary["fine"])
+        self.fine_linear = Run(d["fine_linear"], self.summary["fine"]["linear"]) \
+            if d["fine_linear"] is not None else None
+        self.coarse = Run(d["coarse"], {k: self.summary[k] for k in
+                                        ("method", "coarse", "probes", "timings", "speedup",
+                                         "errors")}) if d["coarse"] is not None else None
+        self.timings = self.summary["timings"]
+        self.errors = self.summary.get("errors") if method else None
+        self.speedup = self.summary.get("speedup") if method else None
+
+    def __repr__(self):
+        return (f"<coarsegrain.Simulation {self.method or 'fine only'}, "
+                f"{len(self.times)} frames>")
+
+
+def simulate(scene, method=None, *, frames=True, **options):
+    """Steps the scene's "dynamics" on the fine model and, with ``method``, on its coarse model.
+
+    Exactly `coarsegrain simulate SCENE [--method METHOD]` without its files: the fine model is
+    stepped from the scene's start (corotated with "kinematics": "corotational", and the linear
+    fine model beside it; linear otherwise, post-warped with "warp": "rs"); the method's coarse
+    model (built with the scene's "coarse" block, keyword ``options`` overriding its keys as in
+    coarsen()) is stepped from the matching state, each saved frame carried to the fine mesh and
+    compared with the fine frame of the same time. ``method`` is one name of method_names(), or
+    None for the fine model alone. ``frames=False`` keeps only the probes (the frames on the fine
+    mesh take T x n doubles per run).
+
+    Returns a Simulation (times, fine / fine_linear / coarse runs with probes and frames as
+    arrays, summary, timings, errors). Raises InvalidScene without a "dynamics" block or for a
+    method the scene cannot run, Error with the CLI's message otherwise; Ctrl-C stops the run
+    between steps (KeyboardInterrupt).
+    """
+    method = _method_name(method)
+    d = _core._simulate(scene, method, _to_json(options) if options else "", bool(frames))
+    return Simulation(d, method)
+
+
+class ModeComparison:
+    """A method's modes against the fine ones (Modes.coarse); k fine modes, k_c coarse ones.
+
+    - ``frequencies_hz``, ``eigenvalues``: the coarse model's k_c lowest (ascending);
+    - ``shapes``: #coarse DOFs x k_c mode shapes (mass-normalized);
+    - ``shapes_fine``: #fine DOFs x k_c, the shapes carried to the fine mesh (to_fine @ shapes);
+    - ``pairs``: per fine mode, the column of its coarse mode (largest MAC; int32);
+    - ``mac``: per fine mode, the MAC of its pair;
+    - ``frequency_rel``: per fine mode, |f_coarse - f_fine| / f_fine of its pair
+      (summary["errors"]["frequency_rel"]);
+    - ``coarse_model``: the CoarseModel.
+    """
+
+    def __init__(self, d, errors):
+        self.frequencies_hz = d["frequencies_hz"]
+        self.eigenvalues = d["eigenvalues"]
+        self.shapes = d["shapes"]
+        self.shapes_fine = d["shapes_fine"]
+        self.pairs = d["pairs"]
+        self.mac = d["mac"]
+        self.frequency_rel = _np.asarray(errors["frequency_rel"])
+        self.coarse_model = d["coarse_model"]
+
+
+class Modes:
+    """The result of modes(): the CLI's `coarsegrain modes` without its files.
+
+    - ``frequencies_hz``, ``eigenvalues`` (ω²): the fine model's k lowest, ascending;
+    - ``shapes``: #fine DOFs x k mode shapes, zero at the Dirichlet DOFs, mass-normalized and
+      signed so that their largest entry is positive;
+    - ``coarse``: a ModeComparison with a method, None without;
+    - ``summary``: the CLI's summary.json (but "plots"), same keys and values;
+    - ``timings``: the fine model's phases (summary["fine"]["timings"]: the CLI's, but "read"
+      and "write" of its files);
+    - ``errors``: summary["errors"] with a method ({"frequency_rel"}), None without;
+    - ``fine_model``: the FineModel.
+    """
+
+    def __init__(self, d, method):
+        self.method = method
+        self.summary = d["summary"]
+        self.fine_model = d["fine_model"]
+        self.frequencies_hz = d["fine"]["frequencies_hz"]
+        self.eigenvalues = d["fine"]["eigenvalues"]
+        self.shapes = d["fine"]["shapes"]
+        self.timings = self.summary["fine"]["timings"]
+        self.errors = self.summary.get("errors") if method else None
+        self.coarse = ModeComparison(d["coarse"], self.errors) \
+            if d["coarse"] is not None else None
+
+    def __repr__(self):
+        return f"<coarsegrain.Modes {len(self.frequencies_hz)} modes, {self.method or 'fine only'}>"
+
+
+def modes(scene, method=None, count=10, **options):
+    """The ``count`` lowest natural frequencies and modes, fine and (with ``method``) coarse.
+
+    Exactly `coarsegrain modes SCENE [--method METHOD] --count COUNT` without its files:
+    K φ = ω² M φ with the Dirichlet DOFs held, M the scene's dynamics.mass (consistent without a
+    "dynamics" block); the method's coarse modes are carried to the fine mesh and each fine mode
+    is paired with the coarse mode of largest modal assurance criterion (MAC). ``options``
+    override the scene's "coarse" block keys as in coarsen().
+
+    Returns a Modes (frequencies, shapes and the MAC pairing as arrays, summary). Raises
+    ValueError for a count outside 1..1000 (the CLI's --count range), InvalidScene / Error with
+    the CLI's message for a method the scene cannot run.
+    """
+    method = _method_name(method)
+    if isinstance(count, bool) or not isinstance(count, (int, _np.integer)) \
+            or not 1 <= count <= 1000:
+        raise ValueError(f"modes: count {count!r}: expected an integer in 1..1000")
+    d = _core._modes(scene, method, int(count), _to_json(options) if options else "")
+    return Modes(d, method)

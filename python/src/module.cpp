@@ -1,10 +1,14 @@
 // coarsegrain._core: the C++ side of the Python module (python/coarsegrain/__init__.py wraps it).
+// This file binds scenes, fine and coarse models and coarsen(); hierarchy.cpp the mra methods'
+// hierarchy, dynamics.cpp simulate() and modes(); bindings.hpp holds what they share.
 //
 // Arrays: matrices and vectors the C++ objects own are handed out as read-only NumPy views (and
 // scipy.sparse matrices over such views) that keep their Python owner alive, without copying.
 // Copies are made where the layouts differ: the arrays that build a scene's mesh (NumPy's
 // row-major nodes into Eigen's column-major matrix), a coarse mass (computed on request), the
-// per-element tensors (gathered from the material table) and vectors a function returns.
+// per-element tensors (gathered from the material table) and vectors a function returns;
+// to_fine @ U of the hierarchy's operator copies U into column-major order, and its result is
+// taken over without a copy.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -16,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "bindings.hpp"
 #include "coarsegrain/coarsen/fine_run.hpp"
 #include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
@@ -33,73 +38,22 @@ namespace cg = coarsegrain;
 namespace {
 
 using cg::Index;
-using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
-using IntArray = py::array_t<long long, py::array::c_style | py::array::forcecast>;
-
-py::object json_to_python(const nlohmann::json& j) {
-    return py::module_::import("json").attr("loads")(j.dump());
-}
-
-// A read-only NumPy view of the values at `data`, kept alive by `owner`.
-template <class T>
-py::array view(const T* data, std::vector<py::ssize_t> shape, std::vector<py::ssize_t> strides,
-               py::handle owner) {
-    py::array a(py::dtype::of<T>(), std::move(shape), std::move(strides), data, owner);
-    a.attr("setflags")(py::arg("write") = false);
-    return a;
-}
-
-template <class T>
-py::array vector_view(const T* data, py::ssize_t n, py::handle owner) {
-    return view(data, {n}, {static_cast<py::ssize_t>(sizeof(T))}, owner);
-}
-
-py::array vector_view(const cg::Vector& v, py::handle owner) {
-    return vector_view(v.data(), v.size(), owner);
-}
-
-// #rows by #cols view of an Eigen matrix (column-major: Fortran strides).
-py::array matrix_view(const cg::Matrix& m, py::handle owner) {
-    const auto s = static_cast<py::ssize_t>(sizeof(double));
-    return view(m.data(), {m.rows(), m.cols()}, {s, s * m.rows()}, owner);
-}
-
-py::array index_matrix_view(const cg::IndexMatrix& m, py::handle owner) {
-    const auto s = static_cast<py::ssize_t>(sizeof(Index));
-    return view(m.data(), {m.rows(), m.cols()}, {s * m.cols(), s}, owner);
-}
-
-// A scipy.sparse.csc_matrix over the compressed storage of M (compressed; owned by `owner`).
-py::object scipy_view(const cg::SparseMatrix& M, py::handle owner) {
-    CG_VERIFY(M.isCompressed(), "internal: a sparse matrix handed to Python is not compressed");
-    const py::ssize_t nnz = M.nonZeros();
-    py::tuple storage = py::make_tuple(vector_view(M.valuePtr(), nnz, owner),
-                                       vector_view(M.innerIndexPtr(), nnz, owner),
-                                       vector_view(M.outerIndexPtr(), M.cols() + 1, owner));
-    return py::module_::import("scipy.sparse")
-        .attr("csc_matrix")(storage, py::arg("shape") = py::make_tuple(M.rows(), M.cols()),
-                            py::arg("copy") = false);
-}
-
-cg::SparseMatrix compressed(cg::SparseMatrix M) {
-    M.makeCompressed();
-    return M;
-}
-
-py::array_t<double> to_numpy(const cg::Vector& v) {
-    py::array_t<double> a(v.size());
-    std::copy(v.data(), v.data() + v.size(), a.mutable_data());
-    return a;
-}
-
-cg::Vector from_numpy(const DoubleArray& a, Index size, const char* what) {
-    CG_VERIFY(
-        a.ndim() == 1 && a.shape(0) == size, "{}: expected a vector of {} values, got shape {}",
-        what, size,
-        py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()))))
-            .cast<std::string>());
-    return Eigen::Map<const cg::Vector>(a.data(), size);
-}
+using cg::python::build_fine;
+using cg::python::compressed;
+using cg::python::DoubleArray;
+using cg::python::from_numpy;
+using cg::python::index_matrix_view;
+using cg::python::IntArray;
+using cg::python::json_to_python;
+using cg::python::matrix_view;
+using cg::python::PyCoarse;
+using cg::python::PyFine;
+using cg::python::PyScene;
+using cg::python::scipy_view;
+using cg::python::timings_dict;
+using cg::python::to_numpy;
+using cg::python::vector_view;
+using cg::python::view;
 
 // #E by n by n per-element tensors of `materials` (Mandel, or Voigt with `voigt`).
 py::array_t<double> element_tensors(const cg::material::ElementMaterials& materials, int dim,
@@ -206,40 +160,10 @@ std::map<int, cg::material::Material> element_materials_from_arrays(cg::mesh::Me
     return out;
 }
 
-// ---------------------------------------------------------------------------------------------
-// Python-side objects. Each holds what its arrays view; a view keeps its Python owner alive.
-
-struct PyScene {
-    std::shared_ptr<const cg::scene::Scene> scene;
-};
-
-/// A fine model, and once solved (solve_fine) its solution. The model lives in `run`.
-struct PyFine {
-    std::shared_ptr<const cg::scene::Scene> scene;
-    std::shared_ptr<cg::coarsen::FineRun> run;
-    bool solved = false;
-    std::once_flag mass_once;
-    cg::SparseMatrix M;  ///< fine mass, on request
-    std::mutex mutex;    ///< held while the run changes (solve, warp)
-
-    const cg::SparseMatrix& mass() {
-        std::call_once(mass_once,
-                       [this] { M = compressed(cg::scene::mass_matrix(*scene, run->model)); });
-        return M;
-    }
-};
-
 struct PyStatic {
     std::shared_ptr<const cg::scene::Scene> scene;
     cg::scene::StaticSolution solution;
     int dim = 3;
-};
-
-struct PyCoarse {
-    std::shared_ptr<PyFine> fine;
-    cg::coarsen::CoarseModel model;
-    std::once_flag mass_once;
-    std::optional<cg::SparseMatrix> M;
 };
 
 struct PyResult {
@@ -250,24 +174,6 @@ struct PyResult {
     cg::coarsen::Errors errors;
     cg::Timings timings;  ///< the coarse solve's phases (build phases: coarse_model.timings)
 };
-
-py::dict timings_dict(const cg::Timings& t) {
-    py::dict d;
-    for (const auto& [phase, seconds] : t.entries())
-        d[py::str(phase)] = (d.contains(phase) ? d[py::str(phase)].cast<double>() : 0.0) + seconds;
-    return d;
-}
-
-std::shared_ptr<PyFine> build_fine(const std::shared_ptr<const cg::scene::Scene>& scene) {
-    auto fine = std::make_shared<PyFine>();
-    fine->scene = scene;
-    fine->run = std::make_shared<cg::coarsen::FineRun>();
-    cg::python::run_interruptible([&] {
-        fine->run->model = cg::scene::build_fine_model(*scene, &fine->run->timings);
-        fine->run->model.K.makeCompressed();
-    });
-    return fine;
-}
 
 // Solves the fine model as its scene asks (coarsen::solve_fine), once; keeps the factorization
 // if `method` uses it.
@@ -281,12 +187,8 @@ void solve_fine(PyFine& fine, const cg::scene::Scene& scene, const std::string& 
 std::shared_ptr<PyResult> coarsen(const std::shared_ptr<const cg::scene::Scene>& base,
                                   const std::string& method, const std::string& overrides,
                                   std::shared_ptr<PyFine> fine) {
-    std::shared_ptr<const cg::scene::Scene> scene = base;
-    if (!overrides.empty()) {
-        const nlohmann::json o = cg::scene::parse_json(overrides, base->source + " (options)");
-        scene =
-            std::make_shared<const cg::scene::Scene>(cg::scene::with_coarse_overrides(*base, o));
-    }
+    const std::shared_ptr<const cg::scene::Scene> scene =
+        cg::python::with_overrides(base, overrides);
     cg::coarsen::validate_method(*scene, method);
     if (!fine) fine = build_fine(base);
     CG_VERIFY(fine->scene == base,
@@ -346,6 +248,8 @@ void register_exceptions(py::module_& m) {
 PYBIND11_MODULE(_core, m) {
     m.doc() = "coarsegrain's C++ core; use the package `coarsegrain`, which wraps it.";
     register_exceptions(m);
+    cg::python::bind_hierarchy(m);
+    cg::python::bind_dynamics(m);
 
     // ---- scenes
     py::class_<PyScene>(m, "Scene",
@@ -675,6 +579,26 @@ Returns a StaticSolution. Raises NotPositiveDefinite naming the cause if the mod
             },
             py::arg("u"), "to_fine applied to one coarse vector (a new array).")
         .def(
+            "_apply_to_fine_columns",
+            [](const PyCoarse& c, const DoubleArray& U) {
+                const cg::Matrix x = cg::python::columns_from_numpy(U, c.model.to_fine.cols());
+                cg::Matrix y;
+                cg::python::run_interruptible([&] { y = c.model.to_fine * x; });
+                return cg::python::owned_matrix(std::move(y));
+            },
+            py::arg("U"),
+            "to_fine applied to each column of a #coarse DOFs x k array: #fine DOFs x k (a new "
+            "array, Fortran order).")
+        .def_property_readonly(
+            "hierarchy",
+            [](PyCoarse& c) -> py::object {
+                const auto h = c.python_hierarchy();
+                if (!h) return py::none();
+                return py::cast(h);
+            },
+            "The material-adapted hierarchy behind the model (a Hierarchy: levels C̃^k, A^k, "
+            "B^k, W^k and multilevel solves) for the mra methods; None for the others.")
+        .def(
             "element_tensors",
             [](const PyCoarse& c, const std::string& notation) {
                 const bool voigt = parse_notation(notation);
@@ -728,6 +652,14 @@ Raises Error for a method without coarse elements (mra).)")
             "max_displacement_rel, compliance_ratio, stress_rel.")
         .def_property_readonly(
             "coarse_model", [](const PyResult& r) { return r.coarse; }, "The CoarseModel.")
+        .def_property_readonly(
+            "hierarchy",
+            [](const PyResult& r) -> py::object {
+                const auto h = r.coarse->python_hierarchy();
+                if (!h) return py::none();
+                return py::cast(h);
+            },
+            "coarse_model.hierarchy: the mra methods' Hierarchy, None for the others.")
         .def_property_readonly(
             "fine_model", [](const PyResult& r) { return r.fine; },
             "The FineModel the method was compared on.")

@@ -98,3 +98,64 @@ def test_threads_share_a_fine_model():
         # the same computation on the same data: round-off of the solvers' reductions
         for key, value in alone.errors.items():
             assert r.errors[key] == pytest.approx(value, rel=1e-9), (method, key)
+
+
+# A simulate() call of about 7 s: the demo beam at scale 0.25 (16x4x4 hexes) corotated, its 110
+# steps of about 60 ms each (a few Newton iterations).
+SIMULATE_SCENE = "cg.scene_from_dict(dict(cg.demo_scene(0.25), kinematics='corotational'))"
+
+
+def test_ctrl_c_stops_a_simulation_between_steps():
+    child = textwrap.dedent(f"""
+        import sys, time
+        import coarsegrain as cg
+        scene = {SIMULATE_SCENE}
+        print("start", flush=True)
+        t = time.perf_counter()
+        try:
+            cg.simulate(scene)
+            print("finished", time.perf_counter() - t, flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", time.perf_counter() - t, flush=True)
+    """)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    p = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True,
+                         env=env)
+    assert p.stdout.readline().strip() == "start"
+    time.sleep(1.0)
+    p.send_signal(signal.SIGINT)
+    out, _ = p.communicate(timeout=120)
+    word, seconds = out.split()
+    assert word == "interrupted", out
+    # Ctrl-C 1 s in lands in the time stepping, which stops before its next step (or Newton
+    # phase), about 60 ms later: the call ends at about 15% of its whole time (half of it
+    # leaves room for noise)
+    scene = eval(SIMULATE_SCENE)
+    t = time.perf_counter()
+    cg.simulate(scene, frames=False)
+    full = time.perf_counter() - t
+    assert float(seconds) < 0.5 * full, (seconds, full)
+
+
+def test_a_simulation_releases_the_gil():
+    """As test_the_gil_is_released, for simulate() (the demo beam at scale 0.5, linear: about
+    1.2 s, most of it the fine factorization and 110 steps)."""
+    scene = cg.scene_from_dict(cg.demo_scene(0.5))
+    done = threading.Event()
+    ticks = []
+
+    def count():
+        while not done.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.01)
+
+    t = threading.Thread(target=count)
+    start = time.perf_counter()
+    t.start()
+    cg.simulate(scene, "effective-tensor")
+    end = time.perf_counter()
+    done.set()
+    t.join()
+    during = [x for x in ticks if start + 0.1 < x < end - 0.1]
+    # as test_the_gil_is_released: at least a quarter of the possible 10 ms ticks
+    assert len(during) >= 0.25 * (end - start - 0.2) / 0.01, (len(during), end - start)

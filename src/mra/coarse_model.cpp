@@ -190,6 +190,7 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
         m.bc.dofs = held;
         m.bc.values = Vector::Zero(static_cast<Index>(held.size()));
     }
+    m.hierarchy = hierarchy;
     m.timings = h.timings;
 
     HierarchyReport report;

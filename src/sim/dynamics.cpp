@@ -205,6 +205,8 @@ Trajectory run_steps(const State& start, const DynamicsOptions& options, const S
     double stepping = 0, since_frame = 0;
     StepSolves frame;  // the solves since the last saved frame
     for (int k = 1; k <= options.steps; ++k) {
+        if (interrupt_requested())
+            throw Interrupted(fmt::format("interrupted at step {} of {}", k, options.steps));
         const auto begin = std::chrono::steady_clock::now();
         const StepSolves solves = step(s);
         frame.solves += solves.solves;

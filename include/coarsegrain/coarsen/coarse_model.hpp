@@ -20,6 +20,10 @@
 #include "coarsegrain/scene/scene.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 
+namespace coarsegrain::mra {
+struct Hierarchy;
+}
+
 namespace coarsegrain::coarsen {
 
 /// A VTU file a method adds to the output folder (e.g. coarse_model.vtu, harmonic.vtu).
@@ -131,6 +135,9 @@ struct CoarseModel {
     /// The element model behind K, if it is one (empty for mra, whose coarse DOFs are no
     /// element model: corotated kinematics solve it linear).
     std::optional<ElementModel> element_model;
+    /// The material-adapted hierarchy behind the model (the mra methods: its levels C̃^k, A^k,
+    /// B^k, W^k and multilevel solves, mra/multilevel_solver.hpp); null for the other methods.
+    std::shared_ptr<const mra::Hierarchy> hierarchy;
     Timings timings;      ///< build phases; their sum is reported as coarse.timings.build
     MethodReport report;  ///< method figures for summary "coarse"
     std::vector<VtuOutput> outputs;  ///< extra files for the output folder

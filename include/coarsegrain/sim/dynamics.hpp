@@ -146,7 +146,8 @@ using Step = std::function<StepSolves(State& s)>;
 /// `start`, a frame (with energy(state) and ½ vᵀM v) saved every options.output_every steps and
 /// at t = 0. Progress ("<name> time stepping", steps per second) goes to stderr for runs longer
 /// than a second.
-/// @throws whatever step throws
+/// @throws whatever step throws; Interrupted before a step once an interrupt is requested
+///         (request_interrupt)
 Trajectory run_steps(const State& start, const DynamicsOptions& options, const SparseMatrix& M,
                      const Step& step, const std::function<double(const State&)>& energy,
                      const std::string& name);
