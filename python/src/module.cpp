@@ -477,8 +477,10 @@ the Dirichlet conditions applied (dirichlet_dofs / dirichlet_values hold them).)
                 auto s = std::make_shared<PyStatic>();
                 s->scene = f.scene;
                 s->dim = f.run->model.mesh.dim();
-                cg::python::run_interruptible(
-                    [&] { s->solution = cg::scene::solve_static(f.run->model, f.scene->solver); });
+                cg::python::run_interruptible([&] {
+                    s->solution = cg::scene::solve_static(
+                        f.run->model, cg::scene::fine_solver(*f.scene, f.run->model));
+                });
                 return s;
             },
             R"(Solves K u = f with the Dirichlet conditions eliminated (the scene's solver), linear kinematics.

@@ -77,6 +77,16 @@ def test_solve_static_against_scipy(beam):
     assert np.shares_memory(solution.displacements, solution.u)
 
 
+def test_solve_static_with_the_iterative_fine_solver(beam):
+    """solver.backend "mra-pcg" (conjugate gradients with the hierarchy's V-cycle) at a 1e-10
+    residual: the scene's fine solver, equal to the direct solve to 1e-8 of its largest entry."""
+    d, _, fine = beam
+    direct = cg.solve_static(fine).u
+    iterative = cg.solve_static(cg.build_fine_model(cg.scene_from_dict(
+        dict(d, solver={"backend": "mra-pcg", "tolerance": 1e-10})))).u
+    np.testing.assert_allclose(iterative, direct, rtol=0, atol=1e-8 * abs(direct).max())
+
+
 def test_singular_model_raises_the_cli_message(tmp_path):
     d = cg.demo_scene(0.25)
     del d["dirichlet"]

@@ -212,9 +212,10 @@ void run_coarse(const scene::Scene& sc, FineDynamics& fine, const FineReference&
         sc.kinematics == sim::Kinematics::Corotational && m.element_model.has_value();
     std::optional<fem::CorotatedModel> model;
     if (corotated) model.emplace(corotated_model(m, sc.corotation.frame));
-    sim::Trajectory run =
-        step_model(sc, m.K, c.M, m.f, m.bc, v0, corotated ? &*model : nullptr,
-                   corotated ? node_solver_options(m, sc.solver) : sc.solver, method, c.timings);
+    sim::Trajectory run = step_model(
+        sc, m.K, c.M, m.f, m.bc, v0, corotated ? &*model : nullptr,
+        corotated ? node_solver_options(m, scene::direct_solver(sc)) : scene::direct_solver(sc),
+        method, c.timings);
     frames = frames_json(run, o.steps, corotated);
     frames["kinematics"] = corotated ? "corotational" : "linear";
     const fem::RsWarp* warp = sc.rs_warp && !corotated ? &fine_warp(sc, fine) : nullptr;
@@ -253,8 +254,8 @@ sim::Trajectory run_fine(const scene::Scene& sc, FineDynamics& fine, RunObserver
         run = step_model(sc, fm.K, fine.M, fm.f, fm.bc, v0, &model, node_options, "fine",
                          fine.timings);
     } else {
-        run =
-            step_model(sc, fm.K, fine.M, fm.f, fm.bc, v0, nullptr, sc.solver, "fine", fine.timings);
+        run = step_model(sc, fm.K, fine.M, fm.f, fm.bc, v0, nullptr, scene::fine_solver(sc, fm),
+                         "fine", fine.timings);
         if (sc.rs_warp) {
             const fem::RsWarp& warp = fine_warp(sc, fine);
             const auto begin = std::chrono::steady_clock::now();
@@ -283,7 +284,7 @@ ModelDynamics run_fine_linear(const scene::Scene& sc, FineDynamics& fine, const 
     const sim::Trajectory run =
         step_model(sc, fm.K, fine.M, fm.f, fm.bc,
                    sim::uniform_field(fm.K.rows(), sc.dynamics->initial_velocity), nullptr,
-                   sc.solver, "fine-linear", timings);
+                   scene::fine_solver(sc, fm), "fine-linear", timings);
     ModelDynamics r;
     r.name = "fine-linear";
     compare_with_fine(
@@ -331,7 +332,8 @@ FineDynamics fine_dynamics(const scene::FineModel& model, fem::MassType mass, Ti
 const fem::RsWarp& fine_warp(const scene::Scene& sc, FineDynamics& fine) {
     if (!fine.warp) {
         const Phase phase("warp", &fine.timings);
-        fine.warp = std::make_unique<fem::RsWarp>(fine.model.mesh, fine.model.bc, sc.solver);
+        fine.warp =
+            std::make_unique<fem::RsWarp>(fine.model.mesh, fine.model.bc, scene::direct_solver(sc));
     }
     return *fine.warp;
 }
@@ -476,7 +478,7 @@ ModesResult modes_models(const scene::Scene& sc, FineDynamics& fine,
     ModesResult out;
     {
         const Phase phase("eigenpairs", &fine.timings);
-        out.fine = sim::modes(fm.K, fine.M, fm.bc, count, sc.solver);
+        out.fine = sim::modes(fm.K, fine.M, fm.bc, count, scene::fine_solver(sc, fm));
     }
     const Index k = out.fine.eigenvalues.size();
     for (const std::string& method : methods) {
@@ -487,7 +489,7 @@ ModesResult modes_models(const scene::Scene& sc, FineDynamics& fine,
             observer.coarse_built(method, c);
             {
                 const Phase phase("eigenpairs", &c.timings);
-                r.modes = sim::modes(c.model.K, c.M, c.model.bc, count, sc.solver);
+                r.modes = sim::modes(c.model.K, c.M, c.model.bc, count, scene::direct_solver(sc));
             }
             r.carried = c.model.to_fine * r.modes.vectors;
             r.pairs = sim::pair_modes(out.fine.vectors, r.carried);
