@@ -18,15 +18,17 @@ SCENE = "cg.scene_from_dict(cg.demo_scene(0.67))"
 METHOD = "mra-linear"
 
 
-def test_ctrl_c_stops_a_long_call():
+def seconds_until_interrupted(scene, call, delay):
+    """Runs `call` (Python text using `scene`) in a child interpreter, sends it SIGINT `delay`
+    seconds after it starts, and returns how long the call ran before KeyboardInterrupt."""
     child = textwrap.dedent(f"""
         import sys, time
         import coarsegrain as cg
-        scene = {SCENE}
+        scene = {scene}
         print("start", flush=True)
         t = time.perf_counter()
         try:
-            cg.coarsen(scene, {METHOD!r})
+            {call}
             print("finished", time.perf_counter() - t, flush=True)
         except KeyboardInterrupt:
             print("interrupted", time.perf_counter() - t, flush=True)
@@ -35,15 +37,41 @@ def test_ctrl_c_stops_a_long_call():
     p = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True,
                          env=env)
     assert p.stdout.readline().strip() == "start"
-    time.sleep(0.3)
+    time.sleep(delay)
     p.send_signal(signal.SIGINT)
     out, _ = p.communicate(timeout=120)
     word, seconds = out.split()
     assert word == "interrupted", out
+    return float(seconds)
+
+
+def ticks_during(call):
+    """Runs call() while another Python thread appends a time every 10 ms; returns the ticks
+    away from the call's ends and the call's duration."""
+    done = threading.Event()
+    ticks = []
+
+    def count():
+        while not done.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.01)
+
+    t = threading.Thread(target=count)
+    start = time.perf_counter()
+    t.start()
+    call()
+    end = time.perf_counter()
+    done.set()
+    t.join()
+    return [x for x in ticks if start + 0.1 < x < end - 0.1], end - start
+
+
+def test_ctrl_c_stops_a_long_call():
+    seconds = seconds_until_interrupted(SCENE, f"cg.coarsen(scene, {METHOD!r})", 0.3)
     # Ctrl-C 0.3 s in lands in "Z and C adapted", which finishes; "A" and the rest never
     # start: the call ends at about 55% of its whole time (80% leaves room for noise)
     full = timed_call()
-    assert float(seconds) < 0.8 * full, (seconds, full)
+    assert seconds < 0.8 * full, (seconds, full)
 
 
 def timed_call():
@@ -57,24 +85,9 @@ def test_the_gil_is_released():
     """Another Python thread runs while coarsen() computes: it counts far more often than a
     thread that only gets the GIL at the call's end would (once)."""
     scene = eval(SCENE)
-    done = threading.Event()
-    ticks = []
-
-    def count():
-        while not done.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.01)
-
-    t = threading.Thread(target=count)
-    start = time.perf_counter()
-    t.start()
-    cg.coarsen(scene, METHOD)
-    end = time.perf_counter()
-    done.set()
-    t.join()
-    during = [x for x in ticks if start + 0.1 < x < end - 0.1]
+    during, duration = ticks_during(lambda: cg.coarsen(scene, METHOD))
     # 10 ms sleeps over the call: at least a quarter of the possible ticks
-    assert len(during) >= 0.25 * (end - start - 0.2) / 0.01, (len(during), end - start)
+    assert len(during) >= 0.25 * (duration - 0.2) / 0.01, (len(during), duration)
 
 
 def test_threads_share_a_fine_model():
@@ -106,27 +119,7 @@ SIMULATE_SCENE = "cg.scene_from_dict(dict(cg.demo_scene(0.25), kinematics='corot
 
 
 def test_ctrl_c_stops_a_simulation_between_steps():
-    child = textwrap.dedent(f"""
-        import sys, time
-        import coarsegrain as cg
-        scene = {SIMULATE_SCENE}
-        print("start", flush=True)
-        t = time.perf_counter()
-        try:
-            cg.simulate(scene)
-            print("finished", time.perf_counter() - t, flush=True)
-        except KeyboardInterrupt:
-            print("interrupted", time.perf_counter() - t, flush=True)
-    """)
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
-    p = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True,
-                         env=env)
-    assert p.stdout.readline().strip() == "start"
-    time.sleep(1.0)
-    p.send_signal(signal.SIGINT)
-    out, _ = p.communicate(timeout=120)
-    word, seconds = out.split()
-    assert word == "interrupted", out
+    seconds = seconds_until_interrupted(SIMULATE_SCENE, "cg.simulate(scene)", 1.0)
     # Ctrl-C 1 s in lands in the time stepping, which stops before its next step (or Newton
     # phase), about 60 ms later: the call ends at about 15% of its whole time (half of it
     # leaves room for noise)
@@ -134,28 +127,13 @@ def test_ctrl_c_stops_a_simulation_between_steps():
     t = time.perf_counter()
     cg.simulate(scene, frames=False)
     full = time.perf_counter() - t
-    assert float(seconds) < 0.5 * full, (seconds, full)
+    assert seconds < 0.5 * full, (seconds, full)
 
 
 def test_a_simulation_releases_the_gil():
     """As test_the_gil_is_released, for simulate() (the demo beam at scale 0.5, linear: about
     1.2 s, most of it the fine factorization and 110 steps)."""
     scene = cg.scene_from_dict(cg.demo_scene(0.5))
-    done = threading.Event()
-    ticks = []
-
-    def count():
-        while not done.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.01)
-
-    t = threading.Thread(target=count)
-    start = time.perf_counter()
-    t.start()
-    cg.simulate(scene, "effective-tensor")
-    end = time.perf_counter()
-    done.set()
-    t.join()
-    during = [x for x in ticks if start + 0.1 < x < end - 0.1]
+    during, duration = ticks_during(lambda: cg.simulate(scene, "effective-tensor"))
     # as test_the_gil_is_released: at least a quarter of the possible 10 ms ticks
-    assert len(during) >= 0.25 * (end - start - 0.2) / 0.01, (len(during), end - start)
+    assert len(during) >= 0.25 * (duration - 0.2) / 0.01, (len(during), duration)
