@@ -210,9 +210,13 @@ void validate_grid(const Options& options, const Eigen::Vector3i& cells, int dim
                   options.levels, options.levels - 1, factor, d, cells[d]);
 }
 
-Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
-                          const std::vector<Index>& fixed_dofs, const Options& options,
-                          const material::ElementMaterials* materials) {
+namespace {
+
+/// build_hierarchy on the fine operator given either over all DOFs (K) or already without the
+/// Dirichlet DOFs (A_free, moved into Hierarchy::A_fine).
+Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_free,
+                const std::vector<Index>& fixed_dofs, const Options& options,
+                const material::ElementMaterials* materials) {
     CG_VERIFY(mesh.grid.has_value(),
               "mra: the fine mesh must be a regular grid (mesh.grid), the material-adapted "
               "hierarchy is built on nested grids");
@@ -224,11 +228,14 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     CG_VERIFY(grid_nodes(cells, dim) == mesh.num_nodes(), "mra: the mesh has {} nodes, its grid {}",
               mesh.num_nodes(), grid_nodes(cells, dim));
     const Index n_dofs = mesh.num_dofs();
-    CG_VERIFY(K.rows() == n_dofs && K.cols() == n_dofs, "mra: K is {}x{}, the mesh has {} DOFs",
-              K.rows(), K.cols(), n_dofs);
+    const Index n_given = n_dofs - (K ? 0 : static_cast<Index>(fixed_dofs.size()));
+    const SparseMatrix& given = K ? *K : *A_free;
+    CG_VERIFY(given.rows() == n_given && given.cols() == n_given,
+              "mra: the fine operator is {}x{}, the mesh has {} {}DOFs", given.rows(), given.cols(),
+              n_given, K ? "" : "free ");
     // Checked once here: the localized solves factorize submatrices without input checks.
-    for (Index j = 0; j < K.outerSize(); ++j)
-        for (SparseMatrix::InnerIterator it(K, j); it; ++it)
+    for (Index j = 0; j < given.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(given, j); it; ++it)
             CG_VERIFY(std::isfinite(it.value()), "mra: K({}, {}) = {} is not finite", it.row(), j,
                       it.value());
     const bool by_cell = options.localization == Localization::Cell &&
@@ -267,16 +274,20 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         if (blind)
             h.fine_fixed = Eigen::Map<const IndexVector>(fixed_dofs.data(),
                                                          static_cast<Index>(fixed_dofs.size()));
+        CG_VERIFY(K || !keep_fixed,
+                  "mra: the {} treatment keeps the Dirichlet DOFs; give the fine operator over all "
+                  "DOFs",
+                  dirichlet_name(options.dirichlet));
         if (keep_fixed) {
-            h.A_fine = K;
+            h.A_fine = *K;
             if (penalize)
                 for (const Index d : fixed_dofs)
                     h.A_fine.coeffRef(d, d) += options.dirichlet == DirichletTreatment::Penalty
                                                    ? options.penalty
-                                                   : options.penalty * K.coeff(d, d);
+                                                   : options.penalty * K->coeff(d, d);
             h.A_fine.makeCompressed();
         } else {
-            h.A_fine = principal_submatrix(K, h.fine_dofs);
+            h.A_fine = K ? principal_submatrix(*K, h.fine_dofs) : std::move(*A_free);
         }
     }
 
@@ -328,9 +339,13 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
         {
             const Phase phase(tag + "canonical", &h.timings);
             SparseMatrix C_node = canonical_refinement(L.cells, dim, options.refinement);
-            if (k == q - 1 && options.measurement == Measurement::Stiffness)
+            if (k == q - 1 && options.measurement == Measurement::Stiffness) {
+                CG_VERIFY(K,
+                          "mra: stiffness-weighted measurements need the fine operator over "
+                          "all DOFs");
                 C_node = weighted_refinement(std::move(C_node), coincident,
-                                             stiffness_weights(K, mesh.elements, dim));
+                                             stiffness_weights(*K, mesh.elements, dim));
+            }
             RefinementOperators ops =
                 refinement_operators(C_node, coincident, dim, dofs_next,
                                      options.dirichlet != DirichletTreatment::Eliminate);
@@ -506,6 +521,20 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     return h;
 }
 
+}  // namespace
+
+Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
+                          const std::vector<Index>& fixed_dofs, const Options& options,
+                          const material::ElementMaterials* materials) {
+    return build(mesh, &K, nullptr, fixed_dofs, options, materials);
+}
+
+Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
+                               const std::vector<Index>& fixed_dofs, const Options& options,
+                               const material::ElementMaterials* materials) {
+    return build(mesh, nullptr, &A_free, fixed_dofs, options, materials);
+}
+
 SparseMatrix basis(const Hierarchy& h, int k) {
     const int q = h.num_levels();
     CG_VERIFY(k >= 1 && k <= q, "mra: level {} out of range 1..{}", k, q);
@@ -540,8 +569,9 @@ SparseMatrix galerkin_operator(const Hierarchy& h, const SparseMatrix& X, int k)
     SparseMatrix Y = S * X * SparseMatrix(S.transpose());
     for (int l = h.num_levels() - 1; l >= k; --l) {  // the products that make A^l
         const Level& L = h.level(l);
-        Y = symmetric_from_lower(detail::congruence(
-            L.C_adapted.sparse(), Y, detail::node_blocks(L.dofs, L.cells, h.dim, kGroupSide[h.dim])));
+        Y = symmetric_from_lower(
+            detail::congruence(L.C_adapted.sparse(), Y,
+                               detail::node_blocks(L.dofs, L.cells, h.dim, kGroupSide[h.dim])));
     }
     Y.makeCompressed();
     return Y;

@@ -25,43 +25,15 @@ double largest_eigenvalue(const SparseMatrix& A, const Vector& inverse_diagonal)
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     Vector x(A.rows()), y;
     for (Index i = 0; i < x.size(); ++i) x[i] = u(rng);
+    const Vector diagonal = A.diagonal();
     double lambda = 0;
     for (int it = 0; it < kPowerIterations; ++it) {
         solve::symmetric_multiply(A, x, y);
-        lambda = x.dot(y) / x.dot(inverse_diagonal.cwiseInverse().cwiseProduct(x));
+        lambda = x.dot(y) / x.dot(diagonal.cwiseProduct(x));
         x = inverse_diagonal.cwiseProduct(y);
         x /= x.norm();
     }
     return lambda;
-}
-
-/// The matrix of the free-DOF operator A over all `n` DOFs: A's entry (i, j) at
-/// (free[i], free[j]), nothing in the rows and columns of the fixed DOFs.
-SparseMatrix expand(const SparseMatrix& A, const IndexVector& free, Index n) {
-    SparseMatrix K(n, n);
-    std::vector<int> counts(static_cast<std::size_t>(n), 0);
-    for (Index j = 0; j < A.cols(); ++j)
-        counts[static_cast<std::size_t>(free[j])] = A.outerIndexPtr()[j + 1] - A.outerIndexPtr()[j];
-    K.reserve(counts);
-    for (Index j = 0; j < A.cols(); ++j)
-        for (SparseMatrix::InnerIterator it(A, j); it; ++it)
-            K.insert(free[it.row()], free[j]) = it.value();
-    K.makeCompressed();
-    return K;
-}
-
-/// The indices in 0..n-1 not in `fixed` (sorted), ascending.
-IndexVector complement(const std::vector<Index>& fixed, Index n) {
-    IndexVector free(n - static_cast<Index>(fixed.size()));
-    std::size_t f = 0;
-    Index next = 0;
-    for (Index d = 0; d < n; ++d) {
-        if (f < fixed.size() && fixed[f] == d)
-            ++f;
-        else
-            free[next++] = d;
-    }
-    return free;
 }
 
 }  // namespace
@@ -219,15 +191,10 @@ solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& grid,
     const int degree = options.smoother_degree;
     return
         [mesh, fixed, o, degree](const SparseMatrix& A) -> std::unique_ptr<solve::Preconditioner> {
-            const Index n = mesh->num_dofs();
-            CG_VERIFY(A.rows() == n - static_cast<Index>(fixed->size()) && A.cols() == A.rows(),
-                      "solver (mra-pcg): the matrix is {}x{}, the grid has {} free DOFs", A.rows(),
-                      A.cols(), n - static_cast<Index>(fixed->size()));
-            const IndexVector free = complement(*fixed, n);
             Hierarchy h;
             {
                 const Phase phase("mra-pcg: hierarchy");
-                h = build_hierarchy(*mesh, expand(A, free, n), *fixed, o);
+                h = build_hierarchy_free(*mesh, A, *fixed, o);
             }
             const Phase phase("mra-pcg: cycle");
             return std::make_unique<MultigridPreconditioner>(std::move(h), A, degree);

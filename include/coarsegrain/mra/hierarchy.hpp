@@ -115,6 +115,16 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                           const std::vector<Index>& fixed_dofs, const Options& options,
                           const material::ElementMaterials* materials = nullptr);
 
+/// build_hierarchy on a fine operator already restricted to the DOFs free of the Dirichlet
+/// conditions (all DOFs of `mesh` but `fixed_dofs`, ascending, as fem::reduce makes it), which
+/// becomes Hierarchy::A_fine without a copy over all DOFs: for the Eliminate and Constrain
+/// treatments and canonical measurements (the others need the DOFs the conditions remove).
+/// @throws Error as build_hierarchy, or if A_free is not #free DOFs square or the options need
+///         the operator over all DOFs
+Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
+                               const std::vector<Index>& fixed_dofs, const Options& options,
+                               const material::ElementMaterials* materials = nullptr);
+
 /// Restricts a fine vector (fine grid DOFs) to the hierarchy's fine DOFs and coarse-grains it to
 /// level k (Sec. 3.6): g^k = C̃^k ... C̃^{q-1} g^q.
 Vector coarse_grain(const Hierarchy& h, const Vector& g_fine, int k);
