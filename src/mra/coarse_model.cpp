@@ -145,6 +145,9 @@ double density(const M& m, std::int64_t nonzeros) {
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierarchy,
                                   const Vector& f_fine, const SparseMatrix* K_fine) {
     const Hierarchy& h = *hierarchy;
+    CG_VERIFY(h.on_grid(),
+              "mra: coarse models are built from hierarchies of nested grids (the coarsest grid "
+              "carries the model's elements); this hierarchy is on level meshes");
     const Level& L1 = h.level(1);
     const int dim = h.dim;
     const Index nodes = grid_nodes(L1.cells, dim);

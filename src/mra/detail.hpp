@@ -126,11 +126,11 @@ SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dag
 /// product take at once.
 void truncate_rows(SparseMatrix& M, double tau, const IndexVector& fine_dofs, int dim);
 
-/// Rigid motions of the finest grid on its present DOFs: dim translations, then the
-/// infinitesimal rotations about the origin (1 in 2D: u = (-y, x); 3 in 3D: u = omega x x), with
-/// positions in units of `unit` (#fine_dofs by dim + dim(dim-1)/2).
-Matrix fine_rigid_modes(int dim, const Eigen::Vector3i& cells, const Eigen::Vector3d& spacing,
-                        double unit, const IndexVector& fine_dofs);
+/// Rigid motions on the present DOFs `dofs` (dim * node + d, sorted) of a level with node
+/// `positions` (#nodes by 3, z = 0 in 2D, in the unit of the invariance correction): dim
+/// translations, then the infinitesimal rotations about the origin (1 in 2D: u = (-y, x); 3 in
+/// 3D: u = omega x x); #dofs by dim + dim(dim-1)/2.
+Matrix rigid_modes(int dim, const Matrix& positions, const IndexVector& dofs);
 
 /// Translation and rotation invariance correction (Sec. 3.5) of C̃ (#coarse_dofs by
 /// #fine_dofs), in place, keeping its sparsity pattern.

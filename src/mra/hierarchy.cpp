@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numeric>
 
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/mra/level_meshes.hpp"
 #include "detail.hpp"
 #include "products.hpp"
 
@@ -34,6 +36,18 @@ SparseMatrix principal_submatrix(const SparseMatrix& K, const IndexVector& keep)
 /// Side, in nodes, of the blocks of coarse nodes the Galerkin product A^k = C̃ A^{k+1} C̃^T takes
 /// together (index: dim): 2x2x2 nodes (24 DOFs) in 3D, 3x3 (18 DOFs) in 2D.
 constexpr int kGroupSide[4] = {0, 0, 3, 2};
+
+/// The groups of level L's DOFs the Galerkin product takes together (detail::congruence): blocks
+/// of kGroupSide nodes per axis on grids; on level meshes, the nodes bucketed by position in
+/// cubes of kGroupSide mean edge lengths, each bucket cut into groups of at most kMaxGroup DOFs.
+std::vector<IndexVector> dof_groups(const Hierarchy& h, const Level& L) {
+    const int side = kGroupSide[h.dim];
+    if (h.on_grid()) return detail::node_blocks(L.dofs, L.cells, h.dim, side);
+    return detail::position_blocks(L.dofs,
+                                   h.positions[static_cast<std::size_t>(L.k - 1)] /
+                                       (side * h.edge_lengths[static_cast<std::size_t>(L.k - 1)]),
+                                   h.dim);
+}
 
 /// Largest Chebyshev distance, in cells of level k, between the node of a row of Phi (Φ^k on the
 /// present fine DOFs, rows h.level(k).dofs or h.fine_dofs for k = q) and the finest nodes of its
@@ -100,7 +114,10 @@ std::string measurement_name(Measurement m) {
     return m == Measurement::Canonical ? "canonical" : "stiffness";
 }
 
-Index Hierarchy::fine_grid_dofs() const { return dim * grid_nodes(fine_cells, dim); }
+Index Hierarchy::fine_grid_dofs() const {
+    return dim *
+           (on_grid() ? grid_nodes(fine_cells, dim) : static_cast<Index>(positions.back().rows()));
+}
 
 const Level& Hierarchy::level(int k) const {
     CG_VERIFY(k >= 1 && k < num_levels(), "mra: level {} out of range 1..{}", k, num_levels() - 1);
@@ -114,6 +131,7 @@ Eigen::Vector3i Hierarchy::cells(int k) const {
 }
 
 Eigen::VectorXd Hierarchy::node_position(int k, Index v) const {
+    if (!on_grid()) return positions[static_cast<std::size_t>(k - 1)].row(v).transpose();
     const Eigen::Vector3i x = node_coordinates(v, cells(k), dim);
     const double scale = std::ldexp(1.0, num_levels() - k);
     Eigen::VectorXd p(dim);
@@ -212,21 +230,74 @@ void validate_grid(const Options& options, const Eigen::Vector3i& cells, int dim
 
 namespace {
 
+/// Mean edge length of a mesh's elements (every pair of an element's nodes for simplices, the
+/// element's first dim edges otherwise: a scale, not a measurement).
+double mean_edge_length(const mesh::Mesh& m) {
+    const int n = static_cast<int>(m.elements.cols());
+    const bool simplex = mesh::is_simplex(m.type);
+    double sum = 0;
+    Index count = 0;
+    for (Index e = 0; e < m.num_elements(); ++e)
+        for (int a = 0; a < (simplex ? n : 1); ++a)
+            for (int b = a + 1; b < (simplex ? n : m.dim() + 1); ++b) {
+                sum += (m.rest_positions.row(m.elements(e, a)) -
+                        m.rest_positions.row(m.elements(e, b)))
+                           .norm();
+                ++count;
+            }
+    CG_VERIFY(count > 0 && sum > 0, "mra: a level mesh has no elements of positive size");
+    return sum / static_cast<double>(count);
+}
+
+/// Checks the level meshes of build_hierarchy and the options they support.
+void validate_level_meshes(const std::vector<mesh::Mesh>& meshes, const Options& options) {
+    CG_VERIFY(static_cast<int>(meshes.size()) == options.levels,
+              "mra: {} level meshes (the finest included) for levels = {}", meshes.size(),
+              options.levels);
+    const int dim = meshes.back().dim();
+    for (std::size_t k = 0; k + 1 < meshes.size(); ++k) {
+        CG_VERIFY(meshes[k].dim() == dim, "mra: level mesh {} is {}D, the fine mesh {}D", k + 1,
+                  meshes[k].dim(), dim);
+        CG_VERIFY(mesh::is_simplex(meshes[k].type),
+                  "mra: level mesh {} has {} elements; coarser levels must be simplicial "
+                  "(triangles or tetrahedra)",
+                  k + 1, mesh::element_name(meshes[k].type));
+        CG_VERIFY(meshes[k].num_nodes() <= meshes[k + 1].num_nodes(),
+                  "mra: level mesh {} has {} nodes, more than the finer level's {}", k + 1,
+                  meshes[k].num_nodes(), meshes[k + 1].num_nodes());
+    }
+    for (const double r : options.radius)
+        CG_VERIFY(std::isinf(r),
+                  "mra: on level meshes the hierarchy is built with global solves (radius "
+                  "infinity), got radius {}",
+                  r);
+    CG_VERIFY(options.measurement == Measurement::Canonical,
+              "mra: stiffness-weighted measurements need nested grids; on level meshes use "
+              "canonical measurements");
+}
+
 /// build_hierarchy on the fine operator given either over all DOFs (K) or already without the
-/// Dirichlet DOFs (A_free, moved into Hierarchy::A_fine).
-Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_free,
-                const std::vector<Index>& fixed_dofs, const Options& options,
-                const material::ElementMaterials* materials) {
-    CG_VERIFY(mesh.grid.has_value(),
+/// Dirichlet DOFs (A_free, moved into Hierarchy::A_fine), on nested grids (meshes null: `mesh`
+/// is a grid) or on level meshes (coarsest first, `mesh` their last).
+Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
+                const SparseMatrix* K, SparseMatrix* A_free, const std::vector<Index>& fixed_dofs,
+                const Options& options, const material::ElementMaterials* materials) {
+    const bool on_grid = meshes == nullptr;
+    CG_VERIFY(!on_grid || mesh.grid.has_value(),
               "mra: the fine mesh must be a regular grid (mesh.grid), the material-adapted "
-              "hierarchy is built on nested grids");
+              "hierarchy is built on nested grids or given level meshes");
     const int dim = mesh.dim();
     const int q = options.levels;
     validate(options);
-    const Eigen::Vector3i cells = mesh.grid->cells;
-    validate_grid(options, cells, dim);
-    CG_VERIFY(grid_nodes(cells, dim) == mesh.num_nodes(), "mra: the mesh has {} nodes, its grid {}",
-              mesh.num_nodes(), grid_nodes(cells, dim));
+    const Eigen::Vector3i cells = on_grid ? mesh.grid->cells : Eigen::Vector3i::Zero();
+    if (on_grid) {
+        validate_grid(options, cells, dim);
+        CG_VERIFY(grid_nodes(cells, dim) == mesh.num_nodes(),
+                  "mra: the mesh has {} nodes, its grid {}", mesh.num_nodes(),
+                  grid_nodes(cells, dim));
+    } else {
+        validate_level_meshes(*meshes, options);
+    }
     const Index n_dofs = mesh.num_dofs();
     const Index n_given = n_dofs - (K ? 0 : static_cast<Index>(fixed_dofs.size()));
     const SparseMatrix& given = K ? *K : *A_free;
@@ -248,8 +319,15 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
     h.dim = dim;
     h.options = options;
     h.fine_cells = cells;
-    h.spacing = mesh.grid->spacing();
-    h.origin = mesh.grid->min;
+    if (on_grid) {
+        h.spacing = mesh.grid->spacing();
+        h.origin = mesh.grid->min;
+    } else {
+        for (const mesh::Mesh& m : *meshes) {
+            h.positions.push_back(m.rest_positions);
+            h.edge_lengths.push_back(mean_edge_length(m));
+        }
+    }
 
     // Level q: the fine operator with the Dirichlet DOFs eliminated or penalized (or, blind,
     // untouched).
@@ -304,17 +382,42 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
         Phi_present.setIdentity();
     }
 
-    // Rigid motions on the present DOFs of the current finer level (invariance correction), in
-    // units of the largest fine spacing.
-    const double unit = h.spacing.head(dim).maxCoeff();
-    Matrix rig_next = detail::fine_rigid_modes(dim, cells, h.spacing, unit, h.fine_dofs);
+    h.levels.resize(static_cast<std::size_t>(q - 1));
+    // Node positions of level k (#nodes by 3) in units of the largest fine spacing (grids) or the
+    // finest mean edge length (level meshes), and the spacing of level k in that unit.
+    const double unit = on_grid ? h.spacing.head(dim).maxCoeff() : h.edge_lengths.back();
+    const auto positions_of = [&](int k) {
+        if (!on_grid) {
+            const Matrix& x = h.positions[static_cast<std::size_t>(k - 1)];
+            Matrix out = Matrix::Zero(x.rows(), 3);
+            out.leftCols(dim) = x / unit;
+            return out;
+        }
+        const Eigen::Vector3i c = h.cells(k);
+        const Eigen::Vector3d spacing = h.spacing * std::ldexp(1.0, q - k) / unit;
+        Matrix out(grid_nodes(c, dim), 3);
+        for (Index j = 0; j < out.rows(); ++j)
+            out.row(j) =
+                node_coordinates(j, c, dim).cast<double>().cwiseProduct(spacing).transpose();
+        return out;
+    };
+    const auto spacing_of = [&](int k) {
+        return on_grid ? std::ldexp(1.0, q - k)
+                       : h.edge_lengths[static_cast<std::size_t>(k - 1)] / unit;
+    };
+    // Rigid motions on the present DOFs of the current finer level (invariance correction).
+    Matrix positions = positions_of(q);
+    Matrix rig_next = detail::rigid_modes(dim, positions, h.fine_dofs);
+    // The finest node at the position of each node of the current finer level (through the
+    // pivots: coincident nodes on grids).
+    std::vector<Index> finest_next(static_cast<std::size_t>(mesh.num_nodes()));
+    std::iota(finest_next.begin(), finest_next.end(), 0);
 
     // Rings of the finer grid of a step in a finite radius (an infinite max_radius: 1e6).
     const auto to_rings = [&](double radius) {
         return static_cast<int>(std::min(std::floor(radius), 1e6)) *
                (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
     };
-    h.levels.resize(static_cast<std::size_t>(q - 1));
     // A^{k+1} with both triangles, as the products take it: the fine operator, then a transient
     // copy of the level above (Level::A keeps the lower triangle).
     const SparseMatrix* A_next = &h.A_fine;
@@ -327,6 +430,7 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
         L.k = k;
         L.cells = h.cells(k);
         const Eigen::Vector3i fine_cells = h.cells(k + 1);
+        const Index fine_count = static_cast<Index>(positions.rows());
         L.radius = options.radius.size() == 1 ? options.radius[0]
                                               : options.radius[static_cast<std::size_t>(k - 1)];
         detail::StepGeometry g;
@@ -335,20 +439,33 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
         g.coarse_cells = L.cells;
         g.fine_spacing = h.spacing * std::ldexp(1.0, q - (k + 1));
         g.fine_dofs = dofs_next;
-        const std::vector<Index> coincident = coincident_nodes(L.cells, dim);
+        // The node of level k+1 each node of level k refines to or is identified with.
+        std::vector<Index> pivots;
         {
             const Phase phase(tag + "canonical", &h.timings);
-            SparseMatrix C_node = canonical_refinement(L.cells, dim, options.refinement);
-            if (k == q - 1 && options.measurement == Measurement::Stiffness) {
-                CG_VERIFY(K,
-                          "mra: stiffness-weighted measurements need the fine operator over "
-                          "all DOFs");
-                C_node = weighted_refinement(std::move(C_node), coincident,
-                                             stiffness_weights(*K, mesh.elements, dim));
+            RefinementOperators ops;
+            if (on_grid) {
+                pivots = coincident_nodes(L.cells, dim);
+                SparseMatrix C_node = canonical_refinement(L.cells, dim, options.refinement);
+                if (k == q - 1 && options.measurement == Measurement::Stiffness) {
+                    CG_VERIFY(K,
+                              "mra: stiffness-weighted measurements need the fine operator over "
+                              "all DOFs");
+                    C_node = weighted_refinement(std::move(C_node), pivots,
+                                                 stiffness_weights(*K, mesh.elements, dim));
+                }
+                ops = refinement_operators(C_node, pivots, dim, dofs_next,
+                                           options.dirichlet != DirichletTreatment::Eliminate);
+            } else {
+                const mesh::Mesh& coarse = (*meshes)[static_cast<std::size_t>(k - 1)];
+                const Matrix& finer = h.positions[static_cast<std::size_t>(k)];
+                pivots = pivot_nodes(coarse.rest_positions, finer);
+                ops = local_refinement_operators(
+                    options.refinement == Refinement::Linear
+                        ? linear_refinement(coarse, finer)
+                        : selection_refinement(pivots, static_cast<Index>(finer.rows())),
+                    pivots, dim, dofs_next, options.dirichlet != DirichletTreatment::Eliminate);
             }
-            RefinementOperators ops =
-                refinement_operators(C_node, coincident, dim, dofs_next,
-                                     options.dirichlet != DirichletTreatment::Eliminate);
             L.dofs = std::move(ops.coarse_dofs);
             L.dropped_dofs = std::move(ops.dropped_dofs);
             L.C = std::move(ops.C);
@@ -357,15 +474,7 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
         }
         CG_VERIFY(L.dofs.size() > 0, "mra: level {} has no degree of freedom left", k);
         g.coarse_dofs = L.dofs;
-        const Index fine_count = grid_nodes(fine_cells, dim);
-        Matrix positions(fine_count, 3);
-        for (Index j = 0; j < fine_count; ++j)
-            positions.row(j) = node_coordinates(j, fine_cells, dim)
-                                   .cast<double>()
-                                   .cwiseProduct(g.fine_spacing)
-                                   .transpose() /
-                               unit;
-        const double rotation_scale = std::ldexp(1.0, q - k - 1);
+        const double rotation_scale = spacing_of(k + 1);
         if (by_cell && !std::isinf(L.radius) && options.refinement == Refinement::Linear) {
             const Phase phase(tag + "rigid left inverse", &h.timings);
             L.C_dagger =
@@ -413,23 +522,19 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
         L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
         L.B.makeCompressed();
 
-        // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node; blind,
-        // the DOFs held at zero when this level is solved.
-        const Index coarse_nodes = grid_nodes(L.cells, dim);
+        // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node (their
+        // pivots' finest node); blind, the DOFs held at zero when this level is solved.
+        const Index coarse_nodes = static_cast<Index>(pivots.size());
+        std::vector<Index> finest(static_cast<std::size_t>(coarse_nodes));
+        for (Index i = 0; i < coarse_nodes; ++i) finest[i] = finest_next[pivots[i]];
         L.dirichlet_nodes.assign(static_cast<std::size_t>(coarse_nodes), 0);
         {
-            const Eigen::Vector3i nq = node_counts(cells, dim);
-            const int s = 1 << (q - k);
-            const auto finest = [&](Index i) {
-                const Eigen::Vector3i x = s * node_coordinates(i, L.cells, dim);
-                return x[0] + nq[0] * (x[1] + nq[1] * x[2]);
-            };
             for (Index i = 0; i < coarse_nodes; ++i)
                 L.dirichlet_nodes[static_cast<std::size_t>(i)] =
-                    fixed_node[static_cast<std::size_t>(finest(i))];
+                    fixed_node[static_cast<std::size_t>(finest[i])];
             std::vector<Index> held;
             for (Index r = 0; blind && r < L.dofs.size(); ++r)
-                if (fixed[static_cast<std::size_t>(dim * finest(L.dofs[r] / dim) +
+                if (fixed[static_cast<std::size_t>(dim * finest[L.dofs[r] / dim] +
                                                    L.dofs[r] % dim)])
                     held.push_back(r);
             L.fixed = Eigen::Map<const IndexVector>(held.data(), static_cast<Index>(held.size()));
@@ -461,7 +566,13 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
             std::vector<int> kept_count(static_cast<std::size_t>(coarse_nodes), 0);
             for (Index r = 0; r < L.dofs.size(); ++r)
                 ++kept_count[static_cast<std::size_t>(L.dofs[r] / dim)];
-            const Eigen::Vector3i nf = node_counts(fine_cells, dim);
+            bool eliminated_boundary = false;  // a Dirichlet node of level k lost a DOF
+            for (Index i = 0; i < coarse_nodes; ++i)
+                eliminated_boundary =
+                    eliminated_boundary || (L.dirichlet_nodes[static_cast<std::size_t>(i)] &&
+                                            kept_count[static_cast<std::size_t>(i)] != dim);
+            if (std::isinf(L.radius) && eliminated_boundary)  // its support: every node
+                std::fill(skip.begin(), skip.end(), 1);
             // Cell localization: node i gets rows from the cells T that (C^† Φ^{k+1})[i, :]
             // touches, within phi_reach (+1 for the linear C^†) of node i, and a cell's region
             // reaches `rings` beyond the cell's patch, 2 patch rings beyond its nodes.
@@ -471,12 +582,12 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
                     ? rings
                     : *std::max_element(L.region_rings.begin(), L.region_rings.end());
             const int reach =
-                std::isinf(L.radius) ? nf.maxCoeff()
-                : by_cell
+                by_cell
                     ? rings + 2 * options.patch + basis_reach(h, Phi_present, k + 1) + 2 * linear
                     : max_region_rings + (options.patch_clip ? 0 : 2 * (options.patch - 1)) +
                           linear;
-            for (Index i = 0; i < coarse_nodes; ++i) {
+            const Eigen::Vector3i nf = node_counts(fine_cells, dim);
+            for (Index i = 0; i < coarse_nodes && !std::isinf(L.radius); ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)
                     continue;
@@ -493,13 +604,12 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
                 detail::correct_invariance(Ct, g, skip, rig, rig_next, positions, rotation_scale);
             rig_next = rig;
         } else {
-            L.invariance_applied.assign(static_cast<std::size_t>(grid_nodes(fine_cells, dim)), 0);
+            L.invariance_applied.assign(static_cast<std::size_t>(fine_count), 0);
             rig_next = L.C * rig_next;
         }
         {
             const Phase phase(tag + "A", &h.timings);
-            L.A = detail::congruence(Ct, A,
-                                     detail::node_blocks(L.dofs, L.cells, dim, kGroupSide[dim]));
+            L.A = detail::congruence(Ct, A, dof_groups(h, L));
         }
         if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);
@@ -517,6 +627,8 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
             A_next = &A_full;
         }
         dofs_next = L.dofs;
+        finest_next = std::move(finest);
+        positions = positions_of(k);
     }
     return h;
 }
@@ -526,13 +638,19 @@ Hierarchy build(const mesh::Mesh& mesh, const SparseMatrix* K, SparseMatrix* A_f
 Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                           const std::vector<Index>& fixed_dofs, const Options& options,
                           const material::ElementMaterials* materials) {
-    return build(mesh, &K, nullptr, fixed_dofs, options, materials);
+    return build(mesh, nullptr, &K, nullptr, fixed_dofs, options, materials);
 }
 
 Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
                                const std::vector<Index>& fixed_dofs, const Options& options,
                                const material::ElementMaterials* materials) {
-    return build(mesh, nullptr, &A_free, fixed_dofs, options, materials);
+    return build(mesh, nullptr, nullptr, &A_free, fixed_dofs, options, materials);
+}
+
+Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& level_meshes, const SparseMatrix& K,
+                          const std::vector<Index>& fixed_dofs, const Options& options) {
+    CG_VERIFY(!level_meshes.empty(), "mra: no level meshes");
+    return build(level_meshes.back(), &level_meshes, &K, nullptr, fixed_dofs, options, nullptr);
 }
 
 SparseMatrix basis(const Hierarchy& h, int k) {
@@ -569,9 +687,7 @@ SparseMatrix galerkin_operator(const Hierarchy& h, const SparseMatrix& X, int k)
     SparseMatrix Y = S * X * SparseMatrix(S.transpose());
     for (int l = h.num_levels() - 1; l >= k; --l) {  // the products that make A^l
         const Level& L = h.level(l);
-        Y = symmetric_from_lower(
-            detail::congruence(L.C_adapted.sparse(), Y,
-                               detail::node_blocks(L.dofs, L.cells, h.dim, kGroupSide[h.dim])));
+        Y = symmetric_from_lower(detail::congruence(L.C_adapted.sparse(), Y, dof_groups(h, L)));
     }
     Y.makeCompressed();
     return Y;

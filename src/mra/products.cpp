@@ -1,6 +1,8 @@
 #include "products.hpp"
 
 #include <algorithm>
+#include <array>
+#include <map>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/mra/refinement.hpp"
@@ -487,6 +489,29 @@ std::vector<IndexVector> node_blocks(const IndexVector& dofs, const Eigen::Vecto
         if (!m.empty())
             groups.emplace_back(
                 Eigen::Map<const IndexVector>(m.data(), static_cast<Index>(m.size())));
+    return groups;
+}
+
+std::vector<IndexVector> position_blocks(const IndexVector& dofs, const Matrix& positions,
+                                         int dim) {
+    std::map<std::array<long, 3>, std::vector<Index>> members;
+    for (Index l = 0; l < dofs.size(); ++l) {
+        std::array<long, 3> cube{0, 0, 0};
+        for (int d = 0; d < dim; ++d)
+            cube[static_cast<std::size_t>(d)] =
+                static_cast<long>(std::floor(positions(dofs[l] / dim, d)));
+        members[cube].push_back(l);
+    }
+    const Index per_group = kMaxGroup / dim * dim;  // whole nodes
+    std::vector<IndexVector> groups;
+    for (const auto& [cube, m] : members)
+        for (std::size_t first = 0; first < m.size();
+             first += static_cast<std::size_t>(per_group)) {
+            const std::size_t last =
+                std::min(m.size(), first + static_cast<std::size_t>(per_group));
+            groups.emplace_back(
+                Eigen::Map<const IndexVector>(m.data() + first, static_cast<Index>(last - first)));
+        }
     return groups;
 }
 

@@ -45,4 +45,9 @@ constexpr Index kMaxGroup = 32;
 std::vector<IndexVector> node_blocks(const IndexVector& dofs, const Eigen::Vector3i& cells, int dim,
                                      int side);
 
+/// The DOFs `dofs` (dim * node + d, sorted) of nodes at `positions` (#nodes by dim), grouped by
+/// the unit cubes (squares) of space their nodes lie in, each cube's DOFs cut into groups of at
+/// most kMaxGroup (whole nodes); each group lists positions in `dofs`, ascending.
+std::vector<IndexVector> position_blocks(const IndexVector& dofs, const Matrix& positions, int dim);
+
 }  // namespace coarsegrain::mra::detail

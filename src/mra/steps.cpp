@@ -620,9 +620,9 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
         part.dofs = Eigen::Map<const IndexVector>(dofs.data(), static_cast<Index>(dofs.size()));
         std::vector<Eigen::Triplet<double, Index>> entries;
         for (const Index e : elems) {
-            const Matrix Ke = fem::element_stiffness(mesh.type, mesh.element_positions(e),
-                                                     material::tensor(materials.of(e), dim),
-                                                     formulation);
+            const Matrix Ke =
+                fem::element_stiffness(mesh.type, mesh.element_positions(e),
+                                       material::tensor(materials.of(e), dim), formulation);
             std::vector<Index> pos(static_cast<std::size_t>(Ke.rows()), -1);
             for (Index a = 0; a < mesh.elements.cols(); ++a)
                 for (int d = 0; d < dim; ++d) {
@@ -840,15 +840,12 @@ Matrix rotation_map(int dim, const Eigen::Vector3d& x) {
 
 }  // namespace
 
-Matrix fine_rigid_modes(int dim, const Eigen::Vector3i& cells, const Eigen::Vector3d& spacing,
-                        double unit, const IndexVector& fine_dofs) {
+Matrix rigid_modes(int dim, const Matrix& positions, const IndexVector& dofs) {
     const int nrot = dim == 3 ? 3 : 1;
-    Matrix R = Matrix::Zero(fine_dofs.size(), dim + nrot);
-    for (Index a = 0; a < fine_dofs.size(); ++a) {
-        const int c = static_cast<int>(fine_dofs[a] % dim);
-        const Eigen::Vector3d x =
-            node_coordinates(fine_dofs[a] / dim, cells, dim).cast<double>().cwiseProduct(spacing) /
-            unit;
+    Matrix R = Matrix::Zero(dofs.size(), dim + nrot);
+    for (Index a = 0; a < dofs.size(); ++a) {
+        const int c = static_cast<int>(dofs[a] % dim);
+        const Eigen::Vector3d x = positions.row(dofs[a] / dim).transpose();
         R(a, c) = 1.0;
         R.block(a, dim, 1, nrot) = rotation_map(dim, x).row(c);
     }
@@ -862,7 +859,7 @@ std::vector<char> correct_invariance(SparseMatrix& Ct, const StepGeometry& g,
     const int dim = g.dim;
     const int nrot = dim == 3 ? 3 : 1;
     const int m = dim + nrot;
-    const Index num_fine = grid_nodes(g.fine_cells, dim);
+    const Index num_fine = static_cast<Index>(fine_positions.rows());
     std::vector<char> applied(static_cast<std::size_t>(num_fine), 0);
     const Index ncols = static_cast<Index>(Ct.cols());
     Ct.makeCompressed();

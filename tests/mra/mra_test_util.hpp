@@ -6,6 +6,7 @@
 #include <map>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "coarsegrain/fem/assembly.hpp"
@@ -32,19 +33,19 @@ struct GridProblem {
 /// Material id 1 (stiff) or 0 (soft) of an element from its centroid.
 using MaterialPattern = std::function<int(const Eigen::VectorXd& centroid)>;
 
-/// A grid over the unit square/cube (or [0, size]) with two isotropic materials (E_soft, E_stiff,
-/// nu = 0.3) given by `pattern`, fixed on the face y = max (hung from its top), under gravity
-/// (0, -1[, 0]) and, if `pull`, a traction (1, 0.5[, 0.25]) on the face y = 0 so that every
-/// displacement component is excited.
-inline GridProblem hung_problem(int dim, const Eigen::Vector3i& cells, double E_soft,
-                                double E_stiff, const MaterialPattern& pattern,
-                                const Eigen::Vector3d& size = Eigen::Vector3d::Ones(),
-                                bool pull = true) {
+/// The problem on `mesh` (covering [0, size] along each axis) with two isotropic materials
+/// (E_soft, E_stiff, nu = 0.3) given by `pattern`, fixed on the face y = max (hung from its top),
+/// under gravity (0, -1[, 0]) and, if `pull`, a traction (1, 0.5[, 0.25]) on the face y = 0 so
+/// that every displacement component is excited.
+inline GridProblem hung_problem_on(mesh::Mesh mesh, double E_soft, double E_stiff,
+                                   const MaterialPattern& pattern,
+                                   const Eigen::Vector3d& size = Eigen::Vector3d::Ones(),
+                                   bool pull = true) {
     GridProblem p;
+    const int dim = mesh.dim();
     const Eigen::VectorXd lo = Eigen::VectorXd::Zero(dim);
     const Eigen::VectorXd hi = size.head(dim);
-    p.mesh = mesh::make_grid(dim == 2 ? mesh::ElementType::Quad4 : mesh::ElementType::Hex8, lo, hi,
-                             cells.head(dim));
+    p.mesh = std::move(mesh);
     const Matrix centres = mesh::element_centroids(p.mesh);
     for (Index e = 0; e < p.mesh.num_elements(); ++e)
         p.mesh.material_ids[e] = pattern(centres.row(e).transpose());
@@ -78,6 +79,20 @@ inline GridProblem hung_problem(int dim, const Eigen::Vector3i& cells, double E_
     solver.compute(sys.K);
     p.u = fem::expand(sys, solver.solve(sys.rhs), p.bc, p.mesh.num_dofs());
     return p;
+}
+
+/// hung_problem_on a grid over the unit square/cube (or [0, size]) with `cells` per axis: quads
+/// or hexes.
+inline GridProblem hung_problem(int dim, const Eigen::Vector3i& cells, double E_soft,
+                                double E_stiff, const MaterialPattern& pattern,
+                                const Eigen::Vector3d& size = Eigen::Vector3d::Ones(),
+                                bool pull = true) {
+    const Eigen::VectorXd lo = Eigen::VectorXd::Zero(dim);
+    const Eigen::VectorXd hi = size.head(dim);
+    return hung_problem_on(
+        mesh::make_grid(dim == 2 ? mesh::ElementType::Quad4 : mesh::ElementType::Hex8, lo, hi,
+                        cells.head(dim)),
+        E_soft, E_stiff, pattern, size, pull);
 }
 
 /// A homogeneous-free pattern with inclusions: stiff where sin-products are positive.

@@ -25,6 +25,7 @@ namespace coarsegrain::mra {
 /// `K_fine` (fine grid DOFs square) is given when h is adapted to another operator than the
 /// stiffness (Operator::Step): then K = S Φ^1 K_fine Φ^{1,T} S (galerkin_operator) instead of
 /// S A^1 S.
+/// @throws Error if h is a hierarchy on level meshes (Hierarchy::on_grid false)
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& h, const Vector& f_fine,
                                   const SparseMatrix* K_fine = nullptr);
 

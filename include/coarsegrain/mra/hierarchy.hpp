@@ -1,6 +1,7 @@
 #pragma once
 /// @file The material-adapted hierarchy of refinable basis functions and wavelets (Chen et al.
-/// 2019, Sec. 3, Algorithm 1) on nested regular grids.
+/// 2019, Sec. 3, Algorithm 1) on nested regular grids or on given simplicial level meshes, nested
+/// or not (level_meshes.hpp).
 ///
 /// Notation (shared/papers/NOTES.md): canonical quantities C^k, W^k, C^{k,†}; material-adapted
 /// refinement C̃^k (the paper's outline C^k), stiffness A^k, wavelet stiffness B^k, basis Φ^k and
@@ -37,7 +38,7 @@ namespace coarsegrain::mra {
 /// One level k < q of the hierarchy, built from level k+1 (Algorithm 1, lines 2-7).
 struct Level {
     int k = 0;              ///< paper index, 1 = coarsest
-    Eigen::Vector3i cells;  ///< grid cells per axis of level k
+    Eigen::Vector3i cells;  ///< grid cells per axis of level k (0 on level meshes)
     /// DOFs of level k present in the hierarchy (indices dim*node + d into the level's grid
     /// DOFs, sorted). Rows of C̃, A, Φ follow this order.
     IndexVector dofs;
@@ -78,11 +79,15 @@ struct Level {
 struct Hierarchy {
     int dim = 3;
     Options options;
-    Eigen::Vector3i fine_cells;  ///< cells per axis of level q
-    Eigen::Vector3d spacing;     ///< cell size of level q
-    Eigen::Vector3d origin;      ///< position of node 0
-    IndexVector fine_dofs;       ///< present DOFs of level q (all but the eliminated fixed ones)
-    SparseMatrix A_fine;         ///< A^q: the fine stiffness on fine_dofs (+ penalty)
+    Eigen::Vector3i fine_cells;  ///< cells per axis of level q (grids; 0 on level meshes)
+    Eigen::Vector3d spacing;     ///< cell size of level q (grids)
+    Eigen::Vector3d origin;      ///< position of node 0 (grids)
+    /// Level meshes only (empty on grids): node positions of level k, positions[k-1] (#nodes of
+    /// the level's mesh by dim), and the mean edge length of its mesh, edge_lengths[k-1].
+    std::vector<Matrix> positions;
+    std::vector<double> edge_lengths;
+    IndexVector fine_dofs;  ///< present DOFs of level q (all but the eliminated fixed ones)
+    SparseMatrix A_fine;    ///< A^q: the fine stiffness on fine_dofs (+ penalty)
     /// DirichletTreatment::Ignore only: positions in fine_dofs of the fixed DOFs (A_fine is then
     /// the unconstrained stiffness on every grid DOF).
     IndexVector fine_fixed;
@@ -90,10 +95,12 @@ struct Hierarchy {
     Timings timings;            ///< phases "level k: <phase>"
 
     int num_levels() const { return static_cast<int>(levels.size()) + 1; }
+    /// True for a hierarchy of nested grids, false for one on level meshes.
+    bool on_grid() const { return positions.empty(); }
     Index fine_grid_dofs() const;
     /// Level k, 1 <= k < q. @throws Error otherwise
     const Level& level(int k) const;
-    /// Cells per axis of level k (1..q).
+    /// Cells per axis of level k (1..q) of a grid hierarchy (0 on level meshes).
     Eigen::Vector3i cells(int k) const;
     /// Rest position of node v of level k (size dim).
     Eigen::VectorXd node_position(int k, Index v) const;
@@ -124,6 +131,25 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
 Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
                                const std::vector<Index>& fixed_dofs, const Options& options,
                                const material::ElementMaterials* materials = nullptr);
+
+/// Builds the material-adapted hierarchy on simplicial level meshes (Algorithm 1), nested or not:
+/// the canonical operators of level_meshes.hpp (linear_refinement or, for Dirac refinement, the
+/// selection of pivot_nodes; local_refinement_operators), then the steps of the grid
+/// construction with global solves. The level-k nodes are those of level_meshes[k-1]; a node of
+/// a coarser level lies on the Dirichlet boundary when its pivot chain ends on a fixed fine node.
+/// Fine DOFs and vectors are those of the finest mesh.
+///
+/// @param[in] level_meshes  levels 1..q, coarsest first; the last is the fine mesh (any element
+///                          type, only its nodes are used), the others simplicial
+/// @param[in] K, fixed_dofs as build_hierarchy on a grid, over the fine mesh's DOFs
+/// @param[in] options       levels must equal level_meshes.size(); global solves (radius
+///                          infinity), canonical measurements and a Dirichlet treatment other
+///                          than constrain
+/// @throws Error if the meshes or options do not meet the above, a local left inverse does not
+///         exist (local_refinement_operators), or a wavelet stiffness B^k is not positive
+///         definite (level meshes so different that W^k lost rank)
+Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& level_meshes, const SparseMatrix& K,
+                          const std::vector<Index>& fixed_dofs, const Options& options);
 
 /// Restricts a fine vector (fine grid DOFs) to the hierarchy's fine DOFs and coarse-grains it to
 /// level k (Sec. 3.6): g^k = C̃^k ... C̃^{q-1} g^q.

@@ -1,0 +1,91 @@
+#pragma once
+/// @file Canonical multiresolution between simplicial level meshes, nested or not (Chen et al.
+/// 2019, Secs. 3.1 and 5.1: the construction "does not make any special assumption on how these
+/// meshes are related"): the node-level refinement C^k (Eq. 6) of level k's P1 hat functions in
+/// those of level k+1, a pivot node of level k+1 per node of level k, and from them a sparse,
+/// local left inverse C^{k,†} and kernel W^k.
+///
+/// On nested meshes (every node of level k is a node of level k+1, e.g. regular subdivision) the
+/// operators are those of refinement.hpp: C^{k,†} is the injection at the coincident nodes and
+/// W^k = [-P I]. Between non-nested meshes C^{k,†} is corrected locally
+/// (local_refinement_operators).
+#include <vector>
+
+#include "coarsegrain/common/types.hpp"
+#include "coarsegrain/mesh/mesh.hpp"
+#include "coarsegrain/mra/refinement.hpp"
+
+namespace coarsegrain::mra {
+
+/// Linear refinement between level meshes: c_ij = λ_i(x_j), the P1 hat function of node i of
+/// `coarse` at node j of the finer level (rows of fine_positions), #coarse nodes by #fine nodes.
+/// For a point inside the coarse mesh (within 1e-10 element sizes) λ are the barycentric
+/// coordinates in the element containing it; outside (or in a cavity), the affine barycentric
+/// coordinates in the nearest element, extrapolated (negative entries), as the effective
+/// tensors' harmonic fields are sampled (Kharevych et al. 2009, Sec. 4.2). Every column sums to
+/// 1 and C^T reproduces affine fields at every fine node to round-off. On nested meshes this is
+/// the refinement relation of P1 hat functions (weights 1/2 at edge midpoints).
+/// @param[in] coarse          a simplicial mesh (Tri3 or Tet4) of level k
+/// @param[in] fine_positions  #fine nodes by coarse.dim()
+/// @throws Error if `coarse` is not simplicial, has a degenerate element, or the sizes differ
+SparseMatrix linear_refinement(const mesh::Mesh& coarse, const Matrix& fine_positions);
+
+/// Dirac refinement between level meshes: c_ij = 1 for j = pivots[i], else 0 (lazy wavelets: the
+/// coarse node is identified with its pivot fine node). #pivots by fine_nodes.
+SparseMatrix selection_refinement(const std::vector<Index>& pivots, Index fine_nodes);
+
+/// The pivot node of level k+1 of every node of level k: distinct nodes, each the nearest to its
+/// coarse node among those not taken by a nearer pair (coarse nodes are served in the order of
+/// their distance to their nearest fine node). On nested meshes: the coincident nodes.
+/// @param[in] coarse_positions  #coarse nodes by dim
+/// @param[in] fine_positions    #fine nodes by dim, at least as many as coarse nodes
+/// @throws Error if there are fewer fine than coarse nodes or the dimensions differ
+std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fine_positions);
+
+/// C^k, a left inverse C^{k,†} and the kernel W^k on the present DOFs for any scalar refinement
+/// C_node with pivots (linear_refinement or selection_refinement with pivot_nodes).
+///
+/// A coarse DOF (i, d) whose pivot DOF (d of node pivots[i]) is present (fine_dofs) is kept with
+/// it as its pivot p. One whose pivot DOF is absent (a Dirichlet DOF eliminated at the finest
+/// level, or a DOF dropped at a finer level) is, as in refinement_operators,
+/// - dropped if keep_boundary_rows is false (elimination);
+/// - kept if keep_boundary_rows is true and its row has an exclusive pivot: a present DOF of a
+///   node that is no pivot, weighted positively by no other such row (the largest weight wins,
+///   then the smallest index); else dropped (always for Dirac refinement).
+///
+/// Row r = (i, d) of C^† is the smallest change of the injection e_p that makes it a left
+/// inverse: c_r = argmin |c - e_p| subject to C c = e_r, with c supported on S_r, the present
+/// DOFs d of the fine nodes in the support of row i of C_node (and p's); the constraints involve
+/// only the rows of C touching S_r, so each row is a small dense least-norm problem (complete
+/// orthogonal decomposition). If that system has no exact solution, S_r grows by the supports of
+/// the rows it touches (up to 4 times). On nested meshes e_p already satisfies it: C^† is the
+/// injection.
+///
+/// The kernel is W = S_N (I - C^T C^†), S_N selecting the present fine DOFs outside a set P of one
+/// kernel pivot per kept row (ascending): C W^T = C - C C^{†,T} C = 0, and W has full row rank
+/// exactly when C^†[:, P] C[:, P]^T is invertible. Row r takes as its kernel pivot the DOF j not
+/// yet taken with the largest |C^†(r, j) C(r, j)|, rows served in the order of their largest
+/// product; on nested meshes P are the pivots and W = [-P I] as on grids. (The pivots of C^†
+/// alone do not do: between levels whose spacings differ by less than 2 along an axis, a row's
+/// exact left inverse can vanish at its nearest fine node.) Rows of C^† hold the fine nodes of
+/// a coarse node's star, rows of W those of the stars of the coarse nodes whose hat functions
+/// reach their fine DOF.
+/// @param[in] C_node     scalar refinement, #coarse nodes by #fine nodes
+/// @param[in] pivots     distinct pivot fine node of every coarse node (pivot_nodes)
+/// @param[in] dim        2 or 3
+/// @param[in] fine_dofs  present fine DOFs, sorted, in [0, dim * C_node.cols())
+/// @param[in] keep_boundary_rows  see above
+/// @throws Error if the sizes disagree, pivots repeat, or a row of C^† has no exact solution
+RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
+                                               const std::vector<Index>& pivots, int dim,
+                                               const IndexVector& fine_dofs,
+                                               bool keep_boundary_rows);
+
+/// Regular subdivision of a simplicial mesh: every triangle into 4, every tetrahedron into 8
+/// (edge midpoints as new nodes; the interior octahedron of a tetrahedron cut along its shortest
+/// diagonal). The nodes of `coarse` keep their indices and come first, then one node per edge.
+/// Materials ids are inherited by the children.
+/// @throws Error if the mesh is not simplicial
+mesh::Mesh subdivide(const mesh::Mesh& coarse);
+
+}  // namespace coarsegrain::mra
