@@ -60,6 +60,7 @@ nlohmann::json level_build_json(const mra::LevelReport& L) {
     nlohmann::json j = {{"level", L.level},
                         {"cells", L.cells},
                         {"nodes", L.nodes},
+                        {"elements", L.elements},
                         {"dofs", L.dofs},
                         {"wavelets", L.wavelets},
                         {"radius", radius_json(L.radius)},

@@ -168,10 +168,10 @@ n_k = len(dofs) DOFs; n_{k+1} those of level k+1 (len(fine_dofs) for k = q-1); w
             "cells",
             [](const PyLevel& l) {
                 const mra::Level& L = l.level();
-                std::vector<int> cells(L.cells.data(), L.cells.data() + l.hierarchy->h->dim);
-                return cells;
+                if (!l.hierarchy->h->on_grid()) return std::vector<int>();
+                return std::vector<int>(L.cells.data(), L.cells.data() + l.hierarchy->h->dim);
             },
-            "Grid cells per axis of level k.")
+            "Grid cells per axis of level k (empty on level meshes).")
         .def_property_readonly(
             "dofs",
             [](py::object self) { return index_view(self.cast<PyLevel&>().level().dofs, self); },

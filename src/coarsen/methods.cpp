@@ -60,15 +60,21 @@ void validate_method(const scene::Scene& scene, const std::string& method) {
                      "{}: coarse.mesh: the {} method needs a coarse mesh", scene.source, method);
         return;
     }
-    CG_VERIFY_AS(InvalidScene, scene.mesh.grid.has_value(),
-                 "{}: mesh: the {} method needs a regular grid (mesh.grid); coarsen other meshes "
-                 "with coarse.mesh (effective-tensor)",
+    CG_VERIFY_AS(InvalidScene, scene.mesh.grid.has_value() || !scene.coarse.level_meshes.empty(),
+                 "{}: mesh: the {} method needs a regular grid (mesh.grid) or the meshes of its "
+                 "coarser levels (coarse.level_meshes); or coarsen with coarse.mesh "
+                 "(effective-tensor)",
                  scene.source, method);
     try {
-        mra::validate_grid(hierarchy_options(scene, method), scene.mesh.grid->cells,
-                           scene.dimension);
+        if (scene.coarse.level_meshes.empty())
+            mra::validate_grid(hierarchy_options(scene, method), scene.mesh.grid->cells,
+                               scene.dimension);
+        else
+            mra::validate_level_meshes(scene.coarse.level_meshes, scene.dimension,
+                                       hierarchy_options(scene, method));
     } catch (const Error& e) {
-        CG_VERIFY_AS(InvalidScene, false, "{}: coarse.levels: {}", scene.source, e.what());
+        CG_VERIFY_AS(InvalidScene, false, "{}: coarse.{}: {}", scene.source,
+                     scene.coarse.level_meshes.empty() ? "levels" : "level_meshes", e.what());
     }
     for (const scene::BoxCondition& c : scene.dirichlet)
         CG_VERIFY_AS(InvalidScene, c.value.isZero(0.0),
@@ -101,7 +107,8 @@ CoarseModel build_coarse_model(const scene::Scene& scene, const scene::FineModel
     CoarseModel m =
         is_hierarchy(method)
             ? mra::build_coarse_model(hierarchy_options(scene, method), scene.coarse.mra_compare,
-                                      fine, scene.dynamics ? &*scene.dynamics : nullptr)
+                                      fine, scene.coarse.level_meshes,
+                                      scene.dynamics ? &*scene.dynamics : nullptr)
             : homogenize::build_coarse_model(scene, fine, method, fine_factorization);
     m.method = method;
     return m;

@@ -21,6 +21,18 @@ namespace {
 
 using Triplet = Eigen::Triplet<double, Index>;
 
+/// Nodes of level k: of its grid, or of its mesh.
+Index level_nodes(const Hierarchy& h, int k) {
+    return h.on_grid() ? grid_nodes(h.cells(k), h.dim)
+                       : static_cast<Index>(h.mesh_positions(k).rows());
+}
+
+/// Elements of level k < q: cells of its grid, or elements of its mesh.
+Index level_elements(const Hierarchy& h, int k) {
+    return h.on_grid() ? cell_count(h.cells(k), h.dim)
+                       : h.level_meshes[static_cast<std::size_t>(k - 1)].num_elements();
+}
+
 /// Volume-weighted mean of the fine element stress of u over each coarsest cell (Mandel rows).
 Matrix cell_mean_stress(const scene::FineModel& fine, const Vector& u,
                         const Eigen::Vector3i& coarse_cells) {
@@ -53,11 +65,15 @@ void add_coarsest_cells(const Hierarchy& h, const scene::FineModel& fine, const 
                         coarsen::FineComparison& c) {
     const int dim = h.dim;
     const Eigen::Vector3i cells = h.level(1).cells;
-    const Index nc = cell_count(cells, dim);
+    const Index nc = level_elements(h, 1);
     report.cells = nc;
-    if (!enabled || nc > kCellTensorsMaxCells) {
-        report.skipped = enabled ? fmt::format("{} coarsest cells > {}", nc, kCellTensorsMaxCells)
-                                 : std::string("coarse.cell_tensors is false");
+    if (!enabled || nc > kCellTensorsMaxCells || !h.on_grid()) {
+        report.skipped = !enabled ? std::string("coarse.cell_tensors is false")
+                         : h.on_grid()
+                             ? fmt::format("{} coarsest cells > {}", nc, kCellTensorsMaxCells)
+                             : std::string(
+                                   "the coarsest level is a mesh (cell tensors are "
+                                   "computed on coarsest grid cells)");
         return;
     }
     const std::vector<CellTensor> tensors =
@@ -145,17 +161,14 @@ double density(const M& m, std::int64_t nonzeros) {
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierarchy,
                                   const Vector& f_fine, const SparseMatrix* K_fine) {
     const Hierarchy& h = *hierarchy;
-    CG_VERIFY(h.on_grid(),
-              "mra: coarse models are built from hierarchies of nested grids (the coarsest grid "
-              "carries the model's elements); this hierarchy is on level meshes");
     const Level& L1 = h.level(1);
     const int dim = h.dim;
-    const Index nodes = grid_nodes(L1.cells, dim);
+    const Index nodes = level_nodes(h, 1);
     const Index n = dim * nodes;
     coarsen::CoarseModel m;
     m.method = "mra";
     m.nodes = nodes;
-    m.elements = L1.cells.head(dim).prod();
+    m.elements = level_elements(h, 1);
 
     // Coefficients of level 1 are the measurements C^1 ... C^{q-1} u of a fine displacement u;
     // a translation t measures s t with s the row sums of that chain (1 for Dirac, 4^(q-1) in
@@ -201,8 +214,9 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
     for (const Level& L : h.levels) {
         LevelReport& r = report.levels.emplace_back();
         r.level = L.k;
-        r.cells.assign(L.cells.data(), L.cells.data() + dim);
-        r.nodes = grid_nodes(L.cells, dim);
+        if (h.on_grid()) r.cells.assign(L.cells.data(), L.cells.data() + dim);
+        r.nodes = level_nodes(h, L.k);
+        r.elements = level_elements(h, L.k);
         r.dofs = L.dofs.size();
         r.wavelets = L.W.rows();
         r.radius = L.radius;
@@ -227,8 +241,10 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
         }
     }
     report.fine_level = {h.num_levels(),
-                         std::vector<int>(h.fine_cells.data(), h.fine_cells.data() + dim),
-                         grid_nodes(h.fine_cells, dim), h.A_fine.nonZeros()};
+                         h.on_grid()
+                             ? std::vector<int>(h.fine_cells.data(), h.fine_cells.data() + dim)
+                             : std::vector<int>(),
+                         level_nodes(h, h.num_levels()), h.A_fine.nonZeros()};
     report.fine_dofs = h.fine_dofs.size();
     m.report = std::move(report);
     return m;
@@ -264,15 +280,21 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
 
 coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOptions& compare,
                                         const scene::FineModel& fine,
+                                        const std::vector<mesh::Mesh>& coarser_levels,
                                         const sim::DynamicsOptions* dynamics) {
+    const auto build = [&](const SparseMatrix& A) {
+        return std::make_shared<const Hierarchy>(
+            coarser_levels.empty()
+                ? build_hierarchy(fine.mesh, A, fine.bc.dofs, options, &fine.materials)
+                : build_hierarchy(coarser_levels, fine.mesh, A, fine.bc.dofs, options));
+    };
     for (std::size_t k = 0; k < fine.bc.dofs.size(); ++k)
         CG_VERIFY(fine.bc.values[static_cast<Index>(k)] == 0.0,
                   "mra: only zero prescribed displacements are supported, but DOF {} is "
                   "prescribed {}",
                   fine.bc.dofs[k], fine.bc.values[static_cast<Index>(k)]);
     if (options.fine_operator == Operator::Stiffness) {
-        const auto h = std::make_shared<const Hierarchy>(
-            build_hierarchy(fine.mesh, fine.K, fine.bc.dofs, options, &fine.materials));
+        const auto h = build(fine.K);
         coarsen::CoarseModel m = coarse_model(h, fine.f);
         m.compare_with_fine = [h, compare](const scene::Scene&, const scene::FineModel& f,
                                            const scene::StaticSolution& u) {
@@ -289,8 +311,7 @@ coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOpt
         S = sim::step_operator(fine.K, fem::mass_matrix(fine.mesh, fine.materials, dynamics->mass),
                                *dynamics);
     }
-    const auto h = std::make_shared<const Hierarchy>(
-        build_hierarchy(fine.mesh, S, fine.bc.dofs, options, &fine.materials));
+    const auto h = build(S);
     coarsen::CoarseModel m = coarse_model(h, fine.f, &fine.K);
     for (const auto& [phase, seconds] : timings.entries()) m.timings.add(phase, seconds);
     return m;

@@ -43,10 +43,9 @@ constexpr int kGroupSide[4] = {0, 0, 3, 2};
 std::vector<IndexVector> dof_groups(const Hierarchy& h, const Level& L) {
     const int side = kGroupSide[h.dim];
     if (h.on_grid()) return detail::node_blocks(L.dofs, L.cells, h.dim, side);
-    return detail::position_blocks(L.dofs,
-                                   h.positions[static_cast<std::size_t>(L.k - 1)] /
-                                       (side * h.edge_lengths[static_cast<std::size_t>(L.k - 1)]),
-                                   h.dim);
+    return detail::position_blocks(
+        L.dofs, h.mesh_positions(L.k) / (side * h.edge_lengths[static_cast<std::size_t>(L.k - 1)]),
+        h.dim);
 }
 
 /// Largest Chebyshev distance, in cells of level k, between the node of a row of Phi (Φ^k on the
@@ -116,7 +115,15 @@ std::string measurement_name(Measurement m) {
 
 Index Hierarchy::fine_grid_dofs() const {
     return dim *
-           (on_grid() ? grid_nodes(fine_cells, dim) : static_cast<Index>(positions.back().rows()));
+           (on_grid() ? grid_nodes(fine_cells, dim) : static_cast<Index>(fine_positions.rows()));
+}
+
+const Matrix& Hierarchy::mesh_positions(int k) const {
+    CG_VERIFY(!on_grid() && k >= 1 && k <= num_levels(),
+              "mra: mesh positions of level {} of a hierarchy {}", k,
+              on_grid() ? "on grids" : "of fewer levels");
+    return k == num_levels() ? fine_positions
+                             : level_meshes[static_cast<std::size_t>(k - 1)].rest_positions;
 }
 
 const Level& Hierarchy::level(int k) const {
@@ -131,7 +138,7 @@ Eigen::Vector3i Hierarchy::cells(int k) const {
 }
 
 Eigen::VectorXd Hierarchy::node_position(int k, Index v) const {
-    if (!on_grid()) return positions[static_cast<std::size_t>(k - 1)].row(v).transpose();
+    if (!on_grid()) return mesh_positions(k).row(v).transpose();
     const Eigen::Vector3i x = node_coordinates(v, cells(k), dim);
     const double scale = std::ldexp(1.0, num_levels() - k);
     Eigen::VectorXd p(dim);
@@ -249,22 +256,25 @@ double mean_edge_length(const mesh::Mesh& m) {
     return sum / static_cast<double>(count);
 }
 
-/// Checks the level meshes of build_hierarchy and the options they support.
-void validate_level_meshes(const std::vector<mesh::Mesh>& meshes, const Options& options) {
-    CG_VERIFY(static_cast<int>(meshes.size()) == options.levels,
-              "mra: {} level meshes (the finest included) for levels = {}", meshes.size(),
-              options.levels);
-    const int dim = meshes.back().dim();
-    for (std::size_t k = 0; k + 1 < meshes.size(); ++k) {
-        CG_VERIFY(meshes[k].dim() == dim, "mra: level mesh {} is {}D, the fine mesh {}D", k + 1,
-                  meshes[k].dim(), dim);
-        CG_VERIFY(mesh::is_simplex(meshes[k].type),
+}  // namespace
+
+void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels, int dim,
+                           const Options& options) {
+    CG_VERIFY(static_cast<int>(coarser_levels.size()) + 1 == options.levels,
+              "mra: {} coarser level meshes for levels = {} (the fine mesh is the last level)",
+              coarser_levels.size(), options.levels);
+    for (std::size_t k = 0; k < coarser_levels.size(); ++k) {
+        const mesh::Mesh& m = coarser_levels[k];
+        CG_VERIFY(m.dim() == dim, "mra: level mesh {} is {}D, the fine mesh {}D", k + 1, m.dim(),
+                  dim);
+        CG_VERIFY(mesh::is_simplex(m.type),
                   "mra: level mesh {} has {} elements; coarser levels must be simplicial "
                   "(triangles or tetrahedra)",
-                  k + 1, mesh::element_name(meshes[k].type));
-        CG_VERIFY(meshes[k].num_nodes() <= meshes[k + 1].num_nodes(),
-                  "mra: level mesh {} has {} nodes, more than the finer level's {}", k + 1,
-                  meshes[k].num_nodes(), meshes[k + 1].num_nodes());
+                  k + 1, mesh::element_name(m.type));
+        CG_VERIFY(
+            k + 1 == coarser_levels.size() || m.num_nodes() <= coarser_levels[k + 1].num_nodes(),
+            "mra: level mesh {} has {} nodes, more than the finer level's {}", k + 1, m.num_nodes(),
+            coarser_levels[k + 1].num_nodes());
     }
     for (const double r : options.radius)
         CG_VERIFY(std::isinf(r),
@@ -276,9 +286,11 @@ void validate_level_meshes(const std::vector<mesh::Mesh>& meshes, const Options&
               "canonical measurements");
 }
 
+namespace {
+
 /// build_hierarchy on the fine operator given either over all DOFs (K) or already without the
 /// Dirichlet DOFs (A_free, moved into Hierarchy::A_fine), on nested grids (meshes null: `mesh`
-/// is a grid) or on level meshes (coarsest first, `mesh` their last).
+/// is a grid) or on level meshes (the coarser levels, coarsest first; `mesh` is level q).
 Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 const SparseMatrix* K, SparseMatrix* A_free, const std::vector<Index>& fixed_dofs,
                 const Options& options, const material::ElementMaterials* materials) {
@@ -296,7 +308,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                   "mra: the mesh has {} nodes, its grid {}", mesh.num_nodes(),
                   grid_nodes(cells, dim));
     } else {
-        validate_level_meshes(*meshes, options);
+        validate_level_meshes(*meshes, dim, options);
+        CG_VERIFY(meshes->empty() || meshes->back().num_nodes() <= mesh.num_nodes(),
+                  "mra: level mesh {} has {} nodes, more than the fine mesh's {}", meshes->size(),
+                  meshes->empty() ? 0 : meshes->back().num_nodes(), mesh.num_nodes());
     }
     const Index n_dofs = mesh.num_dofs();
     const Index n_given = n_dofs - (K ? 0 : static_cast<Index>(fixed_dofs.size()));
@@ -323,10 +338,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         h.spacing = mesh.grid->spacing();
         h.origin = mesh.grid->min;
     } else {
-        for (const mesh::Mesh& m : *meshes) {
-            h.positions.push_back(m.rest_positions);
-            h.edge_lengths.push_back(mean_edge_length(m));
-        }
+        h.level_meshes = *meshes;
+        h.fine_positions = mesh.rest_positions;
+        for (const mesh::Mesh& m : *meshes) h.edge_lengths.push_back(mean_edge_length(m));
+        h.edge_lengths.push_back(mean_edge_length(mesh));
     }
 
     // Level q: the fine operator with the Dirichlet DOFs eliminated or penalized (or, blind,
@@ -388,7 +403,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
     const double unit = on_grid ? h.spacing.head(dim).maxCoeff() : h.edge_lengths.back();
     const auto positions_of = [&](int k) {
         if (!on_grid) {
-            const Matrix& x = h.positions[static_cast<std::size_t>(k - 1)];
+            const Matrix& x = h.mesh_positions(k);
             Matrix out = Matrix::Zero(x.rows(), 3);
             out.leftCols(dim) = x / unit;
             return out;
@@ -458,7 +473,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                                            options.dirichlet != DirichletTreatment::Eliminate);
             } else {
                 const mesh::Mesh& coarse = (*meshes)[static_cast<std::size_t>(k - 1)];
-                const Matrix& finer = h.positions[static_cast<std::size_t>(k)];
+                const Matrix& finer = h.mesh_positions(k + 1);
                 pivots = pivot_nodes(coarse.rest_positions, finer);
                 ops = local_refinement_operators(
                     options.refinement == Refinement::Linear
@@ -647,10 +662,11 @@ Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
     return build(mesh, nullptr, nullptr, &A_free, fixed_dofs, options, materials);
 }
 
-Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& level_meshes, const SparseMatrix& K,
+Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& coarser_levels,
+                          const mesh::Mesh& fine_mesh, const SparseMatrix& K,
                           const std::vector<Index>& fixed_dofs, const Options& options) {
-    CG_VERIFY(!level_meshes.empty(), "mra: no level meshes");
-    return build(level_meshes.back(), &level_meshes, &K, nullptr, fixed_dofs, options, nullptr);
+    CG_VERIFY(!coarser_levels.empty(), "mra: no coarser level meshes");
+    return build(fine_mesh, &coarser_levels, &K, nullptr, fixed_dofs, options, nullptr);
 }
 
 SparseMatrix basis(const Hierarchy& h, int k) {

@@ -1,6 +1,7 @@
 // The "coarse" block of a scene: every coarsening method's options, parsed and validated in one
 // place (scene.hpp, CoarseOptions).
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -37,6 +38,18 @@ mra::Options parse_mra(const JsonReader& r) {
     using namespace mra;
     Options o;
     if (auto v = r.find("levels")) o.levels = static_cast<int>(v->integer(2, kMaxLevels));
+    if (auto v = r.find("level_meshes")) {  // one mesh per level but the finest
+        const std::size_t n = v->json().is_array() ? v->array_size() : 0;
+        v->fail_unless(n >= 1 && static_cast<int>(n) < kMaxLevels,
+                       "expected an array of 1 to {} mesh files, coarsest first", kMaxLevels - 1);
+        if (r.has("levels"))
+            v->fail_unless(
+                static_cast<int>(n) + 1 == o.levels,
+                "{} meshes for coarse.levels = {}: expected levels - 1 (the fine mesh is "
+                "the finest level)",
+                n, o.levels);
+        o.levels = static_cast<int>(n) + 1;
+    }
     if (auto v = r.find("refinement"))
         o.refinement = v->choice({"dirac", "linear"}) == 0 ? Refinement::Dirac : Refinement::Linear;
     if (auto v = r.find("radius")) {
@@ -91,6 +104,14 @@ mra::Options parse_mra(const JsonReader& r) {
     } catch (const Error& e) {
         r.fail("{}", e.what());
     }
+    if (auto v = r.find("level_meshes")) {
+        v->fail_unless(
+            std::all_of(o.radius.begin(), o.radius.end(), [](double x) { return std::isinf(x); }),
+            "the hierarchy on level meshes is built with global solves: leave out "
+            "coarse.radius (or set it to \"inf\")");
+        v->fail_unless(o.measurement == Measurement::Canonical,
+                       "the hierarchy on level meshes needs coarse.measurement \"canonical\"");
+    }
     return o;
 }
 
@@ -101,12 +122,31 @@ CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::stri
     if (coarse.is_null()) return o;
     const JsonReader r(coarse, "coarse", source);
     // One list for every method, so that one scene can be coarsened by each of them.
-    r.allow_only({"mesh", "normals", "boundary", "map", "mass", "levels", "refinement", "radius",
-                  "radius_grid", "patch", "patch_clip", "truncation", "invariance", "dirichlet",
-                  "spectrum_max_dofs", "cell_tensors", "localization", "measurement", "operator",
-                  "defect_tolerance", "max_radius", "boundary_blind"});
+    r.allow_only({"mesh",
+                  "normals",
+                  "boundary",
+                  "map",
+                  "mass",
+                  "levels",
+                  "level_meshes",
+                  "refinement",
+                  "radius",
+                  "radius_grid",
+                  "patch",
+                  "patch_clip",
+                  "truncation",
+                  "invariance",
+                  "dirichlet",
+                  "spectrum_max_dofs",
+                  "cell_tensors",
+                  "localization",
+                  "measurement",
+                  "operator",
+                  "defect_tolerance",
+                  "max_radius",
+                  "boundary_blind"});
     o.homogenize = parse_homogenize(r);
-    o.hierarchy = r.has("levels");
+    o.hierarchy = r.has("levels") || r.has("level_meshes");
     o.mra = parse_mra(r);
     if (auto v = r.find("boundary_blind")) o.boundary_blind = v->boolean();
     if (auto v = r.find("spectrum_max_dofs"))

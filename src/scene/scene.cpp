@@ -21,6 +21,7 @@
 #include "coarsegrain/material/material_field.hpp"
 #include "coarsegrain/mesh/grid.hpp"
 #include "coarsegrain/mesh/point_locator.hpp"
+#include "coarsegrain/mra/hierarchy.hpp"
 #include "coarsegrain/mra/preconditioner.hpp"
 #include "json_reader.hpp"
 
@@ -305,6 +306,37 @@ mesh::Mesh coarse_mesh(const JsonReader& m, int dim, const std::string& base_dir
     return coarse;
 }
 
+/// coarse.level_meshes: each entry a mesh file name or an object read like "mesh", checked as
+/// mra::build_hierarchy will (simplicial, of the scene's dimension, no more nodes than the next
+/// finer level) before any work.
+std::vector<mesh::Mesh> level_meshes(const JsonReader& list, const mesh::Mesh& fine,
+                                     const mra::Options& options, const std::string& base_dir) {
+    std::vector<mesh::Mesh> levels;
+    for (std::size_t i = 0; i < list.array_size(); ++i) {
+        const JsonReader entry = list.at(i);
+        if (entry.json().is_string()) {
+            levels.push_back(io::read_mesh(regular_file(entry, base_dir)));
+            entry.fail_unless(levels.back().dim() == fine.dim(), "the mesh is {}D, the scene {}D",
+                              levels.back().dim(), fine.dim());
+        } else {
+            levels.push_back(coarse_mesh(entry, fine.dim(), base_dir));
+        }
+        entry.fail_unless(mesh::is_simplex(levels.back().type),
+                          "the levels of the hierarchy must be simplicial meshes "
+                          "(triangles or tetrahedra), got {} elements",
+                          mesh::element_name(levels.back().type));
+    }
+    try {
+        mra::validate_level_meshes(levels, fine.dim(), options);
+        CG_VERIFY(levels.back().num_nodes() <= fine.num_nodes(),
+                  "the last level mesh has {} nodes, more than the fine mesh's {}",
+                  levels.back().num_nodes(), fine.num_nodes());
+    } catch (const Error& e) {
+        list.fail("{}", e.what());
+    }
+    return levels;
+}
+
 }  // namespace
 
 namespace {
@@ -498,6 +530,8 @@ Scene parse_scene(const json& j, const std::string& source, const std::string& b
                          s.dynamics->initial_velocity.size());
     if (auto p = root.find("probes"))
         for (std::size_t i = 0; i < p->array_size(); ++i) s.probes.push_back(p->at(i).vector(dim));
+    if (auto c = root.find("coarse"); c && c->has("level_meshes"))
+        s.coarse.level_meshes = level_meshes(c->at("level_meshes"), s.mesh, s.coarse.mra, base_dir);
     if (auto c = root.find("coarse"); c && c->has("mesh")) {
         c->fail_unless(!given.coarse_mesh,
                        "the coarse mesh is also given directly; remove "
@@ -518,6 +552,7 @@ Scene with_coarse_overrides(Scene s, const json& overrides) {
     json block = s.coarse_block.is_object() ? s.coarse_block : json::object();
     for (const auto& [key, value] : overrides.items()) block[key] = value;
     std::optional<mesh::Mesh> mesh = std::move(s.coarse.mesh);
+    std::vector<mesh::Mesh> levels = std::move(s.coarse.level_meshes);
     s.coarse = parse_coarse_options(block, s.source);
     const JsonReader c(block, "coarse", s.source);
     check_coarse_operator(s, c);
@@ -525,6 +560,11 @@ Scene with_coarse_overrides(Scene s, const json& overrides) {
         overrides.contains("mesh")
             ? std::optional<mesh::Mesh>(coarse_mesh(c.at("mesh"), s.dimension, s.base_dir))
             : std::move(mesh);
+    if (c.has("level_meshes"))
+        s.coarse.level_meshes =
+            overrides.contains("level_meshes")
+                ? level_meshes(c.at("level_meshes"), s.mesh, s.coarse.mra, s.base_dir)
+                : std::move(levels);
     s.coarse_block = std::move(block);
     return s;
 }

@@ -59,8 +59,9 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
                                        const scene::StaticSolution& u,
                                        const CompareOptions& options);
 
-/// Builds the hierarchy of the fine model with `options` and returns the coarsest level as a
-/// CoarseModel (coarse_model) whose compare_with_fine is compare_levels with `compare` (the
+/// Builds the hierarchy of the fine model with `options` (on nested grids, or on the level
+/// meshes coarser_levels with the fine mesh as level q if given) and returns the coarsest level as
+/// a CoarseModel (coarse_model) whose compare_with_fine is compare_levels with `compare` (the
 /// hierarchy is kept alive by it). With options.fine_operator Operator::Step the hierarchy is
 /// built on the step operator of `dynamics` (sim::step_operator with the fine mass of
 /// dynamics->mass; phase "step operator" in the model's timings), the model's K is the fine
@@ -70,6 +71,7 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
 ///         if Operator::Step comes without `dynamics`
 coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOptions& compare,
                                         const scene::FineModel& fine,
+                                        const std::vector<mesh::Mesh>& coarser_levels = {},
                                         const sim::DynamicsOptions* dynamics = nullptr);
 
 }  // namespace coarsegrain::mra

@@ -82,10 +82,11 @@ struct Hierarchy {
     Eigen::Vector3i fine_cells;  ///< cells per axis of level q (grids; 0 on level meshes)
     Eigen::Vector3d spacing;     ///< cell size of level q (grids)
     Eigen::Vector3d origin;      ///< position of node 0 (grids)
-    /// Level meshes only (empty on grids): node positions of level k, positions[k-1] (#nodes of
-    /// the level's mesh by dim), and the mean edge length of its mesh, edge_lengths[k-1].
-    std::vector<Matrix> positions;
-    std::vector<double> edge_lengths;
+    /// Level meshes only (empty on grids): the meshes of levels 1..q-1, coarsest first; level k's
+    /// nodes are those of level_meshes[k-1].
+    std::vector<mesh::Mesh> level_meshes;
+    Matrix fine_positions;             ///< level meshes only: the fine mesh's node positions
+    std::vector<double> edge_lengths;  ///< level meshes only: mean edge length of levels 1..q
     IndexVector fine_dofs;  ///< present DOFs of level q (all but the eliminated fixed ones)
     SparseMatrix A_fine;    ///< A^q: the fine stiffness on fine_dofs (+ penalty)
     /// DirichletTreatment::Ignore only: positions in fine_dofs of the fixed DOFs (A_fine is then
@@ -96,7 +97,9 @@ struct Hierarchy {
 
     int num_levels() const { return static_cast<int>(levels.size()) + 1; }
     /// True for a hierarchy of nested grids, false for one on level meshes.
-    bool on_grid() const { return positions.empty(); }
+    bool on_grid() const { return level_meshes.empty(); }
+    /// Level meshes only: node positions of level k = 1..q (#nodes by dim).
+    const Matrix& mesh_positions(int k) const;
     Index fine_grid_dofs() const;
     /// Level k, 1 <= k < q. @throws Error otherwise
     const Level& level(int k) const;
@@ -135,21 +138,28 @@ Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
 /// Builds the material-adapted hierarchy on simplicial level meshes (Algorithm 1), nested or not:
 /// the canonical operators of level_meshes.hpp (linear_refinement or, for Dirac refinement, the
 /// selection of pivot_nodes; local_refinement_operators), then the steps of the grid
-/// construction with global solves. The level-k nodes are those of level_meshes[k-1]; a node of
-/// a coarser level lies on the Dirichlet boundary when its pivot chain ends on a fixed fine node.
-/// Fine DOFs and vectors are those of the finest mesh.
+/// construction with global solves. The nodes of level k < q are those of coarser_levels[k-1],
+/// those of level q the fine mesh's; a node of a coarser level lies on the Dirichlet boundary
+/// when its chain of pivots ends on a fixed fine node.
 ///
-/// @param[in] level_meshes  levels 1..q, coarsest first; the last is the fine mesh (any element
-///                          type, only its nodes are used), the others simplicial
-/// @param[in] K, fixed_dofs as build_hierarchy on a grid, over the fine mesh's DOFs
-/// @param[in] options       levels must equal level_meshes.size(); global solves (radius
-///                          infinity), canonical measurements and a Dirichlet treatment other
-///                          than constrain
+/// @param[in] coarser_levels  levels 1..q-1, coarsest first, simplicial (triangles or
+///                            tetrahedra), with no more nodes than the next finer level
+/// @param[in] fine_mesh       level q: any element type (only its nodes are used)
+/// @param[in] K, fixed_dofs   as build_hierarchy on a grid, over the fine mesh's DOFs
+/// @param[in] options         levels = coarser_levels.size() + 1; global solves (radius
+///                            infinity) and canonical measurements
 /// @throws Error if the meshes or options do not meet the above, a local left inverse does not
 ///         exist (local_refinement_operators), or a wavelet stiffness B^k is not positive
-///         definite (level meshes so different that W^k lost rank)
-Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& level_meshes, const SparseMatrix& K,
+///         definite
+Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& coarser_levels,
+                          const mesh::Mesh& fine_mesh, const SparseMatrix& K,
                           const std::vector<Index>& fixed_dofs, const Options& options);
+
+/// The checks build_hierarchy makes on level meshes and their options, for a scene to make them
+/// before any work.
+/// @throws Error naming the level and what was expected
+void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels, int dim,
+                           const Options& options);
 
 /// Restricts a fine vector (fine grid DOFs) to the hierarchy's fine DOFs and coarse-grains it to
 /// level k (Sec. 3.6): g^k = C̃^k ... C̃^{q-1} g^q.

@@ -15,8 +15,9 @@ namespace coarsegrain::mra {
 /// Build figures of one level k < q.
 struct LevelReport {
     int level = 0;           ///< k
-    std::vector<int> cells;  ///< grid cells per axis (dim entries)
-    Index nodes = 0;         ///< grid nodes
+    std::vector<int> cells;  ///< grid cells per axis (dim entries; empty on level meshes)
+    Index nodes = 0;         ///< nodes of the level's grid or mesh
+    Index elements = 0;      ///< cells of the level's grid or elements of its mesh
     Index dofs = 0;          ///< present DOFs (rows of A^k)
     Index wavelets = 0;      ///< rows of W^k
     double radius = 0;       ///< Level::radius (infinite: global solves)
@@ -32,8 +33,8 @@ struct LevelReport {
 
 /// Figures of the fine level q, which has no refinement and no wavelets.
 struct FineLevelReport {
-    int level = 0;  ///< q
-    std::vector<int> cells;
+    int level = 0;           ///< q
+    std::vector<int> cells;  ///< grid cells per axis (empty on level meshes)
     Index nodes = 0;
     std::int64_t A_nnz = 0;  ///< stored nonzeros of Hierarchy::A_fine
 };

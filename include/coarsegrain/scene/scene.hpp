@@ -48,7 +48,11 @@ struct CoarseOptions {
     std::optional<mesh::Mesh> mesh;
     /// coarse.normals, coarse.boundary, coarse.map (effective tensors and baselines).
     homogenize::Options homogenize;
-    /// coarse.levels was given: the scene configures the material-adapted hierarchy.
+    /// coarse.level_meshes, each read like "mesh": the meshes of the hierarchy's levels
+    /// 1..q-1, coarsest first (the fine mesh is level q), simplicial; empty: nested grids.
+    std::vector<mesh::Mesh> level_meshes;
+    /// coarse.levels or coarse.level_meshes was given: the scene configures the
+    /// material-adapted hierarchy.
     bool hierarchy = false;
     /// coarse.boundary_blind (true | false, default false): `--method all` adds the
     /// boundary-blind variants mra-linear-blind and mra-dirac-blind.
@@ -112,7 +116,8 @@ struct GivenMeshes {
     std::optional<mesh::Mesh> coarse_mesh;
 };
 
-/// Parses and validates a "coarse" block's options, all but coarse.mesh (null: defaults).
+/// Parses and validates a "coarse" block's options, all but the meshes of coarse.mesh and
+/// coarse.level_meshes (null: defaults).
 /// @throws InvalidScene naming coarse.<key>, the expected values and `source`
 CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::string& source);
 

@@ -1,0 +1,121 @@
+// End-to-end: the material-adapted hierarchy on given level meshes (coarse.level_meshes), run
+// with the effective tensors and the baselines on the same coarse mesh (Chen et al. 2019 Sec. 5.1
+// against Kharevych et al. 2009).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "cli/cli_test_util.hpp"
+#include "coarsegrain/io/mesh_io.hpp"
+#include "coarsegrain/mesh/grid.hpp"
+
+using namespace coarsegrain;
+using namespace coarsegrain::test;
+using ::testing::HasSubstr;
+
+namespace {
+
+/// A triangle grid with n x n cells over [0, 1]^2 scaled by `scale` about its centre, interior
+/// nodes moved by up to `distortion` of a cell, written to dir/name.
+std::string write_triangles(const std::string& dir, const std::string& name, int n,
+                            double distortion, double scale, unsigned seed) {
+    const Eigen::Vector2d centre(0.5, 0.5), half = Eigen::Vector2d::Constant(0.5 * scale);
+    mesh::Mesh m = mesh::make_grid(mesh::ElementType::Tri3, centre - half, centre + half,
+                                   Eigen::Vector2i(n, n));
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (Index v = 0; v < m.num_nodes(); ++v) {
+        const Eigen::Vector2d x = m.rest_positions.row(v).transpose();
+        if (((x - centre).cwiseAbs().array() < 0.5 * scale - 1e-9).all())
+            for (int d = 0; d < 2; ++d) m.rest_positions(v, d) += distortion * u(rng) * scale / n;
+    }
+    io::write_mesh(dir + "/" + name, m);
+    return name;
+}
+
+/// The layered square (soft E = 100 and stiff E = 1e5 layers 1/8 thick, 24 x 24 cells of
+/// triangles) hung from its top under gravity; coarse.mesh and the hierarchy's coarsest level
+/// are one 3 x 3 triangle mesh 2% larger than the object, its middle level a distorted 7 x 7
+/// one: no level is nested in another.
+json layered_level_scene(const std::string& dir) {
+    const std::string coarse = write_triangles(dir, "coarse.msh", 3, 0.2, 1.02, 1);
+    const std::string middle = write_triangles(dir, "middle.msh", 7, 0.2, 1.0, 2);
+    return {
+        {"dimension", 2},
+        {"mesh",
+         {{"grid", {{"min", {0, 0}}, {"max", {1, 1}}, {"cells", {24, 24}}, {"element", "tri"}}}}},
+        {"material_field", {{"layers", {{"axis", "y"}, {"thickness", 0.125}, {"ids", {1, 2}}}}}},
+        {"materials",
+         {{"1", {{"E", 100}, {"nu", 0.3}, {"density", 1}}},
+          {"2", {{"E", 1e5}, {"nu", 0.3}, {"density", 1}}}}},
+        {"dirichlet", {{{"box", {{"min", {-1, 0.999999}}, {"max", {2, 2}}}}}}},
+        {"loads", {{"gravity", {0, -1}}}},
+        {"coarse", {{"mesh", {{"file", coarse}}}, {"level_meshes", {coarse, middle}}}}};
+}
+
+// `--method all` with one coarse mesh runs both papers' methods on it. The hierarchy's coarsest
+// level spans the same P1 space of the coarse mesh's nodes as the effective tensors' model, but
+// adapted to the layers: it must beat the effective tensors and every baseline in every error.
+TEST(CliCoarsenLevelMeshes, BothPapersOnOneCoarseMesh) {
+    const std::string dir = temp_dir("cli_level_meshes");
+    const Result r = cli("coarsen " + write_scene(dir, layered_level_scene(dir)) +
+                         " --method all --out " + dir + "/out");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const json s = read_json(dir + "/out/summary.json");
+    std::map<std::string, json> errors;
+    for (const json& m : s["methods"]) errors[m["method"]] = m["errors"];
+    ASSERT_EQ(errors.size(), 6u) << s["methods"].dump();
+    const json& mra = errors.at("mra-linear");
+    for (const char* other : {"effective-tensor", "naive", "voigt", "reuss", "mra-dirac"}) {
+        const json& e = errors.at(other);
+        EXPECT_LT(mra["l2_rel"].get<double>(), e["l2_rel"].get<double>()) << other;
+        EXPECT_LT(mra["energy_rel"].get<double>(), e["energy_rel"].get<double>()) << other;
+        EXPECT_LT(std::abs(mra["compliance_ratio"].get<double>() - 1),
+                  std::abs(e["compliance_ratio"].get<double>() - 1))
+            << other;
+    }
+    // The level report: the levels' meshes, no grid cells, no cell tensors.
+    const json m = read_json(dir + "/out/mra-linear/summary.json");
+    const json& level1 = m["coarse"]["levels"][0];
+    EXPECT_EQ(level1["nodes"], 16);     // 4 x 4 nodes of the coarse mesh
+    EXPECT_EQ(level1["elements"], 18);  // its 3 x 3 x 2 triangles
+    EXPECT_TRUE(level1["cells"].empty());
+    EXPECT_THAT(m["coarse"]["coarsest_cells"]["skipped"].get<std::string>(),
+                HasSubstr("the coarsest level is a mesh"));
+}
+
+TEST(CliCoarsenLevelMeshes, BadLevelsAreErrorsBeforeAnyWork) {
+    const std::string dir = temp_dir("cli_level_meshes_bad");
+    const json good = layered_level_scene(dir);
+    const std::string quads = "quads.msh";
+    io::write_mesh(dir + "/" + quads,
+                   mesh::make_grid(mesh::ElementType::Quad4, Eigen::Vector2d::Zero(),
+                                   Eigen::Vector2d::Ones(), Eigen::Vector2i(2, 2)));
+    const auto expect_error = [&](json scene, const std::string& text) {
+        const Result r = cli("coarsen " + write_scene(dir, scene) + " --method mra-linear --out " +
+                             dir + "/out");
+        EXPECT_NE(r.code, 0);
+        EXPECT_THAT(r.output, HasSubstr(text));
+    };
+    json scene = good;
+    scene["coarse"]["level_meshes"][0] = quads;
+    expect_error(scene, "coarse.level_meshes[0]: the levels of the hierarchy must be simplicial");
+    scene = good;
+    scene["coarse"]["levels"] = 2;
+    expect_error(scene, "coarse.level_meshes: 2 meshes for coarse.levels = 2");
+    scene = good;
+    scene["coarse"]["radius"] = 3;
+    expect_error(scene, "coarse.level_meshes: the hierarchy on level meshes is built with global");
+    scene = good;
+    scene["coarse"]["level_meshes"] = {"missing.msh"};
+    expect_error(scene, "coarse.level_meshes[0]: file");
+    scene = good;
+    scene["coarse"]["level_meshes"] = {good["coarse"]["level_meshes"][1],
+                                       good["coarse"]["level_meshes"][0]};
+    expect_error(scene, "more than the finer level's");
+}
+
+}  // namespace
