@@ -473,13 +473,15 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                                            options.dirichlet != DirichletTreatment::Eliminate);
             } else {
                 const mesh::Mesh& coarse = (*meshes)[static_cast<std::size_t>(k - 1)];
-                const Matrix& finer = h.mesh_positions(k + 1);
-                pivots = pivot_nodes(coarse.rest_positions, finer);
+                const mesh::Mesh& finer =
+                    k + 1 == q ? mesh : (*meshes)[static_cast<std::size_t>(k)];
+                pivots = pivot_nodes(coarse.rest_positions, finer.rest_positions);
                 ops = local_refinement_operators(
                     options.refinement == Refinement::Linear
-                        ? linear_refinement(coarse, finer)
-                        : selection_refinement(pivots, static_cast<Index>(finer.rows())),
-                    pivots, dim, dofs_next, options.dirichlet != DirichletTreatment::Eliminate);
+                        ? linear_refinement(coarse, finer.rest_positions)
+                        : selection_refinement(pivots, finer.num_nodes()),
+                    pivots, finer.elements, dim, dofs_next,
+                    options.dirichlet != DirichletTreatment::Eliminate);
             }
             L.dofs = std::move(ops.coarse_dofs);
             L.dropped_dofs = std::move(ops.dropped_dofs);

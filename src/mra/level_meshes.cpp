@@ -115,22 +115,41 @@ class PointBuckets {
     std::vector<Index> m_first, m_items;
 };
 
+/// Node adjacency of a mesh's elements (nodes sharing an element), as CSR.
+struct NodeGraph {
+    std::vector<Index> first, neighbours;
+
+    NodeGraph(const IndexMatrix& elements, Index nodes) {
+        std::vector<std::vector<Index>> lists(static_cast<std::size_t>(nodes));
+        for (Index e = 0; e < elements.rows(); ++e)
+            for (Index a = 0; a < elements.cols(); ++a)
+                for (Index b = 0; b < elements.cols(); ++b)
+                    if (a != b) lists[elements(e, a)].push_back(elements(e, b));
+        first.push_back(0);
+        for (std::vector<Index>& l : lists) {
+            std::sort(l.begin(), l.end());
+            l.erase(std::unique(l.begin(), l.end()), l.end());
+            neighbours.insert(neighbours.end(), l.begin(), l.end());
+            first.push_back(static_cast<Index>(neighbours.size()));
+        }
+    }
+};
+
 /// Row r of C^†: see local_refinement_operators. Returns (present fine DOF, value) pairs.
 class LeftInverseRow {
   public:
-    LeftInverseRow(const RowMajor& rows, const SparseMatrix& cols,
+    LeftInverseRow(const SparseMatrix& cols, const NodeGraph& graph,
                    const std::vector<Index>& fine_local, const std::vector<Index>& coarse_local,
                    int dim)
-        : m_rows(rows), m_cols(cols), m_fine(fine_local), m_coarse(coarse_local), m_dim(dim) {}
+        : m_cols(cols), m_graph(graph), m_fine(fine_local), m_coarse(coarse_local), m_dim(dim) {}
+
+    /// Largest number of rings of the finer level's graph around the pivot.
+    static constexpr int kMaxRings = 8;
 
     std::vector<std::pair<Index, double>> operator()(Index i, int d, Index pivot) const {
-        std::vector<Index> S{pivot};  // fine nodes
-        for (RowMajor::InnerIterator it(m_rows, i); it; ++it)
-            if (present(it.col(), d)) S.push_back(static_cast<Index>(it.col()));
-        constexpr int kMaxGrowth = 4;
-        for (int growth = 0;; ++growth) {
+        std::vector<Index> S{pivot}, ring{pivot};  // fine nodes: the region and its last ring
+        for (int rings = 0;; ++rings) {
             std::sort(S.begin(), S.end());
-            S.erase(std::unique(S.begin(), S.end()), S.end());
             std::vector<Index> K;  // kept coarse nodes (component d) whose rows touch S
             for (const Index j : S)
                 for (SparseMatrix::InnerIterator it(m_cols, j); it; ++it)
@@ -144,40 +163,49 @@ class LeftInverseRow {
                     const auto a = std::lower_bound(K.begin(), K.end(), it.row());
                     if (a != K.end() && *a == it.row()) M(a - K.begin(), b) = it.value();
                 }
-            const Index own = std::lower_bound(K.begin(), K.end(), i) - K.begin();
-            const Index p = std::lower_bound(S.begin(), S.end(), pivot) - S.begin();
-            Vector target = Vector::Zero(M.rows());
-            target[own] = 1;
-            Vector c = Vector::Zero(M.cols());
-            c[p] = 1;
-            const Vector defect = target - M * c;
-            if (defect.lpNorm<Eigen::Infinity>() > 0)
-                c += Eigen::CompleteOrthogonalDecomposition<Matrix>(M).solve(defect);
-            // An exact solution leaves the round-off of a dense solve with O(1) entries.
-            if ((M * c - target).lpNorm<Eigen::Infinity>() <= 1e-12) {
-                std::vector<std::pair<Index, double>> out;
-                for (Index b = 0; b < c.size(); ++b)
-                    if (c[b] != 0) out.emplace_back(m_fine[m_dim * S[b] + d], c[b]);
-                return out;
+            const auto own = std::lower_bound(K.begin(), K.end(), i);
+            if (own != K.end() && *own == i) {
+                const Index p = std::lower_bound(S.begin(), S.end(), pivot) - S.begin();
+                Vector target = Vector::Zero(M.rows());
+                target[own - K.begin()] = 1;
+                Vector c = Vector::Zero(M.cols());
+                c[p] = 1;
+                const Vector defect = target - M * c;
+                if (defect.lpNorm<Eigen::Infinity>() > 0)
+                    c += Eigen::CompleteOrthogonalDecomposition<Matrix>(M).solve(defect);
+                // An exact solution leaves the round-off of a dense solve with O(1) entries.
+                if ((M * c - target).lpNorm<Eigen::Infinity>() <= 1e-12) {
+                    std::vector<std::pair<Index, double>> out;
+                    for (Index b = 0; b < c.size(); ++b)
+                        if (c[b] != 0) out.emplace_back(m_fine[m_dim * S[b] + d], c[b]);
+                    return out;
+                }
             }
-            CG_VERIFY(growth < kMaxGrowth,
+            // The next ring: present neighbours of the last one not yet in S.
+            std::vector<Index> next;
+            for (const Index j : ring)
+                for (Index k = m_graph.first[j]; k < m_graph.first[j + 1]; ++k) {
+                    const Index n = m_graph.neighbours[k];
+                    if (present(n, d) && !std::binary_search(S.begin(), S.end(), n))
+                        next.push_back(n);
+                }
+            std::sort(next.begin(), next.end());
+            next.erase(std::unique(next.begin(), next.end()), next.end());
+            CG_VERIFY(rings < kMaxRings && !next.empty(),
                       "mra: no local left inverse of the refinement for node {} (component {}) "
-                      "of the coarser level: the level meshes are too different near it (a "
-                      "coarse node whose hat function holds no fine node of its own?)",
-                      i, d);
-            const std::size_t n = S.size();
-            for (const Index l : K)
-                for (RowMajor::InnerIterator it(m_rows, l); it; ++it)
-                    if (present(it.col(), d)) S.push_back(static_cast<Index>(it.col()));
-            if (S.size() == n) growth = kMaxGrowth;  // nothing to add: the next check fails
+                      "of the coarser level within {} rings of its pivot: the level meshes are "
+                      "too different near it",
+                      i, d, rings);
+            S.insert(S.end(), next.begin(), next.end());
+            ring = std::move(next);
         }
     }
 
   private:
     bool present(Index node, int d) const { return m_fine[m_dim * node + d] >= 0; }
 
-    const RowMajor& m_rows;
     const SparseMatrix& m_cols;
+    const NodeGraph& m_graph;
     const std::vector<Index>& m_fine;
     const std::vector<Index>& m_coarse;
     int m_dim;
@@ -254,7 +282,8 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 }
 
 RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
-                                               const std::vector<Index>& pivots, int dim,
+                                               const std::vector<Index>& pivots,
+                                               const IndexMatrix& fine_elements, int dim,
                                                const IndexVector& fine_dofs,
                                                bool keep_boundary_rows) {
     const Index nc = C_node.rows();
@@ -331,7 +360,8 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
     ops.C.resize(nk, nf);
     ops.C.setFromTriplets(t.begin(), t.end());
 
-    const LeftInverseRow left_inverse(rows, C_node, fine_local, coarse_local, dim);
+    const NodeGraph graph(fine_elements, C_node.cols());
+    const LeftInverseRow left_inverse(C_node, graph, fine_local, coarse_local, dim);
     std::vector<std::vector<std::pair<Index, double>>> dagger(static_cast<std::size_t>(nk));
 #pragma omp parallel for schedule(dynamic, 64) if (nk >= 4096)
     for (Index r = 0; r < nk; ++r)

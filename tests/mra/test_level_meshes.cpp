@@ -74,7 +74,8 @@ class LevelMeshes : public ::testing::TestWithParam<LevelParam> {
         const SparseMatrix C_node = refinement() == Refinement::Linear
                                         ? linear_refinement(coarse, fine.rest_positions)
                                         : selection_refinement(pivots, fine.num_nodes());
-        return local_refinement_operators(C_node, pivots, dim(), dofs, keep_boundary_rows);
+        return local_refinement_operators(C_node, pivots, fine.elements, dim(), dofs,
+                                          keep_boundary_rows);
     }
 };
 
@@ -202,7 +203,7 @@ TEST(LevelMeshOperators, EqualTheGridOperatorsOnNestedGrids) {
             const RefinementOperators grid =
                 refinement_operators(C_node, coincident, dim, dofs, false);
             const RefinementOperators local =
-                local_refinement_operators(C_node, coincident, dim, dofs, false);
+                local_refinement_operators(C_node, coincident, p.mesh.elements, dim, dofs, false);
             EXPECT_EQ(local.coarse_dofs, grid.coarse_dofs);
             EXPECT_EQ(local.dropped_dofs, grid.dropped_dofs);
             EXPECT_EQ(max_abs(Matrix(local.C - grid.C)), 0.0);
@@ -241,7 +242,7 @@ TEST(LevelMeshOperators, SubdivisionIsNestedAndConservesMeasure) {
         SparseMatrix C_clean = C;
         C_clean.prune(1e-14, 1);
         const RefinementOperators ops =
-            local_refinement_operators(C_clean, pivots, dim, all, false);
+            local_refinement_operators(C_clean, pivots, fine.elements, dim, all, false);
         EXPECT_EQ(ops.C_dagger.nonZeros(), ops.C.rows());
     }
 }

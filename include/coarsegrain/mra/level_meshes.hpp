@@ -55,11 +55,12 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 ///
 /// Row r = (i, d) of C^† is the smallest change of the injection e_p that makes it a left
 /// inverse: c_r = argmin |c - e_p| subject to C c = e_r, with c supported on S_r, the present
-/// DOFs d of the fine nodes in the support of row i of C_node (and p's); the constraints involve
-/// only the rows of C touching S_r, so each row is a small dense least-norm problem (complete
-/// orthogonal decomposition). If that system has no exact solution, S_r grows by the supports of
-/// the rows it touches (up to 4 times). On nested meshes e_p already satisfies it: C^† is the
-/// injection.
+/// DOFs d of the fine nodes within the fewest rings of p in the finer level's mesh graph (nodes
+/// sharing an element) for which that has an exact solution (up to 8 rings). The constraints
+/// involve only the rows of C touching S_r, so each row is a small dense least-norm problem
+/// (complete orthogonal decomposition). On nested meshes e_p already satisfies it (0 rings): C^†
+/// is the injection. The rings keep the rows' support independent of how much finer the finer
+/// level is (a coarse node's whole star holds about 2^d times the ratio of node counts).
 ///
 /// The kernel is W = S_N (I - C^T C^†), S_N selecting the present fine DOFs outside a set P of one
 /// kernel pivot per kept row (ascending): C W^T = C - C C^{†,T} C = 0, and W has full row rank
@@ -67,17 +68,18 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 /// yet taken with the largest |C^†(r, j) C(r, j)|, rows served in the order of their largest
 /// product; on nested meshes P are the pivots and W = [-P I] as on grids. (The pivots of C^†
 /// alone do not do: between levels whose spacings differ by less than 2 along an axis, a row's
-/// exact left inverse can vanish at its nearest fine node.) Rows of C^† hold the fine nodes of
-/// a coarse node's star, rows of W those of the stars of the coarse nodes whose hat functions
-/// reach their fine DOF.
+/// exact left inverse can vanish at its nearest fine node.) A row of W holds its DOF and the
+/// rows of C^† of the coarse nodes whose hat functions reach it.
 /// @param[in] C_node     scalar refinement, #coarse nodes by #fine nodes
 /// @param[in] pivots     distinct pivot fine node of every coarse node (pivot_nodes)
+/// @param[in] fine_elements  elements of the finer level's mesh (node indices)
 /// @param[in] dim        2 or 3
 /// @param[in] fine_dofs  present fine DOFs, sorted, in [0, dim * C_node.cols())
 /// @param[in] keep_boundary_rows  see above
 /// @throws Error if the sizes disagree, pivots repeat, or a row of C^† has no exact solution
 RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
-                                               const std::vector<Index>& pivots, int dim,
+                                               const std::vector<Index>& pivots,
+                                               const IndexMatrix& fine_elements, int dim,
                                                const IndexVector& fine_dofs,
                                                bool keep_boundary_rows);
 
