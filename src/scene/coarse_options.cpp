@@ -122,29 +122,10 @@ CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::stri
     if (coarse.is_null()) return o;
     const JsonReader r(coarse, "coarse", source);
     // One list for every method, so that one scene can be coarsened by each of them.
-    r.allow_only({"mesh",
-                  "normals",
-                  "boundary",
-                  "map",
-                  "mass",
-                  "levels",
-                  "level_meshes",
-                  "refinement",
-                  "radius",
-                  "radius_grid",
-                  "patch",
-                  "patch_clip",
-                  "truncation",
-                  "invariance",
-                  "dirichlet",
-                  "spectrum_max_dofs",
-                  "cell_tensors",
-                  "localization",
-                  "measurement",
-                  "operator",
-                  "defect_tolerance",
-                  "max_radius",
-                  "boundary_blind"});
+    r.allow_only({"mesh", "normals", "boundary", "map", "mass", "levels", "level_meshes",
+                  "refinement", "radius", "radius_grid", "patch", "patch_clip", "truncation",
+                  "invariance", "dirichlet", "spectrum_max_dofs", "cell_tensors", "localization",
+                  "measurement", "operator", "defect_tolerance", "max_radius", "boundary_blind"});
     o.homogenize = parse_homogenize(r);
     o.hierarchy = r.has("levels") || r.has("level_meshes");
     o.mra = parse_mra(r);
