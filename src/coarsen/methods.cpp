@@ -70,7 +70,7 @@ void validate_method(const scene::Scene& scene, const std::string& method) {
             mra::validate_grid(hierarchy_options(scene, method), scene.mesh.grid->cells,
                                scene.dimension);
         else
-            mra::validate_level_meshes(scene.coarse.level_meshes, scene.dimension,
+            mra::validate_level_meshes(scene.coarse.level_meshes, scene.mesh,
                                        hierarchy_options(scene, method));
     } catch (const Error& e) {
         CG_VERIFY_AS(InvalidScene, false, "{}: coarse.{}: {}", scene.source,

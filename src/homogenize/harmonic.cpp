@@ -336,7 +336,7 @@ Matrix sample_harmonic(const mesh::Mesh& fine, const mesh::PointLocator& locator
             for (int a = 0; a <= dim; ++a)
                 x += near.weights[a] * fine.rest_positions.row(fine.elements(e, a)).transpose();
             if (distance) (*distance)[i] = (x - p).norm();
-            w = detail::barycentric(fine, e, p);  // extrapolation: negative coordinates allowed
+            w = mesh::barycentric_coordinates(fine, e, p);  // extrapolation: negative ones allowed
         }
         H.middleRows(dim * i, dim).setZero();
         for (int a = 0; a <= dim; ++a)

@@ -27,20 +27,6 @@ inline Small p1_gradients(const mesh::Mesh& m, Index e, double* measure = nullpt
     return g;
 }
 
-/// Barycentric coordinates (dim+1) of point p with respect to simplex e, not clamped.
-inline SmallVec barycentric(const mesh::Mesh& m, Index e, const Eigen::VectorXd& p) {
-    const int dim = m.dim();
-    Small D(dim, dim);
-    const Eigen::VectorXd x0 = m.rest_positions.row(m.elements(e, 0)).transpose();
-    for (int i = 0; i < dim; ++i)
-        D.col(i) = m.rest_positions.row(m.elements(e, i + 1)).transpose() - x0;
-    const SmallVec t = D.partialPivLu().solve(p - x0);
-    SmallVec l(dim + 1);
-    l.tail(dim) = t;
-    l[0] = 1.0 - t.sum();
-    return l;
-}
-
 /// Mandel vector of the symmetric part of a dim by dim displacement gradient F (F_ik = du_i/dx_k):
 /// (e11 e22 [e33 √2e23 √2e13] √2e12).
 inline SmallVec mandel_strain(const Small& F) {

@@ -509,6 +509,23 @@ Location PointLocator::locate_nearest(const Eigen::VectorXd& p) const {
     return {};
 }
 
+Eigen::VectorXd barycentric_coordinates(const Mesh& mesh, Index e, const Eigen::VectorXd& p) {
+    CG_VERIFY(is_simplex(mesh.type), "barycentric coordinates need a simplex, got {}",
+              element_name(mesh.type));
+    const int dim = mesh.dim();
+    const Eigen::VectorXd x0 = mesh.rest_positions.row(mesh.elements(e, 0)).transpose();
+    Matrix D(dim, dim);
+    for (int i = 0; i < dim; ++i)
+        D.col(i) = mesh.rest_positions.row(mesh.elements(e, i + 1)).transpose() - x0;
+    const Eigen::FullPivLU<Matrix> lu(D);
+    CG_VERIFY(lu.isInvertible(), "element {} is degenerate", e);
+    const Eigen::VectorXd t = lu.solve(p - x0);
+    Eigen::VectorXd l(dim + 1);
+    l[0] = 1.0 - t.sum();
+    l.tail(dim) = t;
+    return l;
+}
+
 Eigen::VectorXd interpolate(const Mesh& mesh, const Location& loc, const Vector& field,
                             int components) {
     CG_VERIFY(

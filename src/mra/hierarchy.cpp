@@ -258,8 +258,9 @@ double mean_edge_length(const mesh::Mesh& m) {
 
 }  // namespace
 
-void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels, int dim,
-                           const Options& options) {
+void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels,
+                           const mesh::Mesh& fine_mesh, const Options& options) {
+    const int dim = fine_mesh.dim();
     CG_VERIFY(static_cast<int>(coarser_levels.size()) + 1 == options.levels,
               "mra: {} coarser level meshes for levels = {} (the fine mesh is the last level)",
               coarser_levels.size(), options.levels);
@@ -271,10 +272,11 @@ void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels, int di
                   "mra: level mesh {} has {} elements; coarser levels must be simplicial "
                   "(triangles or tetrahedra)",
                   k + 1, mesh::element_name(m.type));
-        CG_VERIFY(
-            k + 1 == coarser_levels.size() || m.num_nodes() <= coarser_levels[k + 1].num_nodes(),
-            "mra: level mesh {} has {} nodes, more than the finer level's {}", k + 1, m.num_nodes(),
-            coarser_levels[k + 1].num_nodes());
+        const Index finer = k + 1 == coarser_levels.size() ? fine_mesh.num_nodes()
+                                                           : coarser_levels[k + 1].num_nodes();
+        CG_VERIFY(m.num_nodes() <= finer,
+                  "mra: level mesh {} has {} nodes, more than the finer level's {}", k + 1,
+                  m.num_nodes(), finer);
     }
     for (const double r : options.radius)
         CG_VERIFY(std::isinf(r),
@@ -308,10 +310,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                   "mra: the mesh has {} nodes, its grid {}", mesh.num_nodes(),
                   grid_nodes(cells, dim));
     } else {
-        validate_level_meshes(*meshes, dim, options);
-        CG_VERIFY(meshes->empty() || meshes->back().num_nodes() <= mesh.num_nodes(),
-                  "mra: level mesh {} has {} nodes, more than the fine mesh's {}", meshes->size(),
-                  meshes->empty() ? 0 : meshes->back().num_nodes(), mesh.num_nodes());
+        validate_level_meshes(*meshes, mesh, options);
     }
     const Index n_dofs = mesh.num_dofs();
     const Index n_given = n_dofs - (K ? 0 : static_cast<Index>(fixed_dofs.size()));

@@ -18,22 +18,6 @@ namespace {
 using Triplet = Eigen::Triplet<double, Index>;
 using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
 
-/// Affine barycentric coordinates of x in simplex e of `mesh` (dim + 1 values summing to 1,
-/// negative outside the simplex).
-Eigen::VectorXd barycentric(const mesh::Mesh& mesh, Index e, const Eigen::VectorXd& x) {
-    const int dim = mesh.dim();
-    const Matrix X = mesh.element_positions(e);  // (dim + 1) by dim
-    Matrix J(dim, dim);
-    for (int a = 0; a < dim; ++a) J.col(a) = (X.row(a + 1) - X.row(0)).transpose();
-    const Eigen::FullPivLU<Matrix> lu(J);
-    CG_VERIFY(lu.isInvertible(), "mra: element {} of a level mesh is degenerate", e);
-    const Eigen::VectorXd t = lu.solve(x - X.row(0).transpose());
-    Eigen::VectorXd lambda(dim + 1);
-    lambda[0] = 1 - t.sum();
-    lambda.tail(dim) = t;
-    return lambda;
-}
-
 /// Uniform buckets over a point set (about one point per bucket) for nearest-point queries that
 /// skip taken points.
 class PointBuckets {
@@ -228,7 +212,7 @@ SparseMatrix linear_refinement(const mesh::Mesh& coarse, const Matrix& fine_posi
     for (Index j = 0; j < nf; ++j) {
         const Eigen::VectorXd x = fine_positions.row(j).transpose();
         element[j] = locator.locate_nearest(x).element;
-        lambda.row(j) = barycentric(coarse, element[j], x).transpose();
+        lambda.row(j) = mesh::barycentric_coordinates(coarse, element[j], x).transpose();
     }
     std::vector<Triplet> t;
     t.reserve(static_cast<std::size_t>(nf) * (dim + 1));

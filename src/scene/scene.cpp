@@ -327,10 +327,7 @@ std::vector<mesh::Mesh> level_meshes(const JsonReader& list, const mesh::Mesh& f
                           mesh::element_name(levels.back().type));
     }
     try {
-        mra::validate_level_meshes(levels, fine.dim(), options);
-        CG_VERIFY(levels.back().num_nodes() <= fine.num_nodes(),
-                  "the last level mesh has {} nodes, more than the fine mesh's {}",
-                  levels.back().num_nodes(), fine.num_nodes());
+        mra::validate_level_meshes(levels, fine, options);
     } catch (const Error& e) {
         list.fail("{}", e.what());
     }

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <random>
 
 #include "cli/cli_test_util.hpp"
 #include "coarsegrain/io/mesh_io.hpp"
@@ -26,13 +25,7 @@ std::string write_triangles(const std::string& dir, const std::string& name, int
     const Eigen::Vector2d centre(0.5, 0.5), half = Eigen::Vector2d::Constant(0.5 * scale);
     mesh::Mesh m = mesh::make_grid(mesh::ElementType::Tri3, centre - half, centre + half,
                                    Eigen::Vector2i(n, n));
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u(-1, 1);
-    for (Index v = 0; v < m.num_nodes(); ++v) {
-        const Eigen::Vector2d x = m.rest_positions.row(v).transpose();
-        if (((x - centre).cwiseAbs().array() < 0.5 * scale - 1e-9).all())
-            for (int d = 0; d < 2; ++d) m.rest_positions(v, d) += distortion * u(rng) * scale / n;
-    }
+    distort_interior(m, distortion, seed);
     io::write_mesh(dir + "/" + name, m);
     return name;
 }

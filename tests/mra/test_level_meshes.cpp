@@ -22,8 +22,9 @@ mesh::Mesh simplex_grid(int dim, const Eigen::Vector3i& n, double distortion, un
     const Eigen::VectorXd half = Eigen::VectorXd::Constant(dim, 0.5 * scale);
     mesh::Mesh m = mesh::make_grid(dim == 2 ? ElementType::Tri3 : ElementType::Tet4, centre - half,
                                    centre + half, n.head(dim));
-    m.grid.reset();
-    if (distortion > 0) test::distort_interior(m, distortion, seed);
+    test::distort_interior(m, distortion, seed);
+    for (Index e = 0; e < m.num_elements(); ++e)
+        EXPECT_GT(mesh::element_measure(m, e), 0) << "inverted element " << e;
     return m;
 }
 

@@ -54,6 +54,12 @@ class PointLocator {
     std::unique_ptr<Impl> m_impl;
 };
 
+/// Barycentric coordinates (dim + 1, summing to 1) of p in simplex e of `mesh`, not clamped:
+/// negative outside the simplex, i.e. the weights of the affine extrapolation of the element's
+/// linear interpolant to p.
+/// @throws Error if the mesh is not simplicial or element e is degenerate
+Eigen::VectorXd barycentric_coordinates(const Mesh& mesh, Index e, const Eigen::VectorXd& p);
+
 /// Interpolates a nodal field (interleaved, `components` values per node) at a location:
 /// sum over the element's nodes a of weights[a] * field(node a).
 /// @return `components` values

@@ -158,8 +158,8 @@ Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& coarser_levels,
 /// The checks build_hierarchy makes on level meshes and their options, for a scene to make them
 /// before any work.
 /// @throws Error naming the level and what was expected
-void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels, int dim,
-                           const Options& options);
+void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels,
+                           const mesh::Mesh& fine_mesh, const Options& options);
 
 /// Restricts a fine vector (fine grid DOFs) to the hierarchy's fine DOFs and coarse-grains it to
 /// level k (Sec. 3.6): g^k = C̃^k ... C̃^{q-1} g^q.
