@@ -15,14 +15,38 @@ inline Index cell_count(const Eigen::Vector3i& cells, int dim) {
     return cells.head(dim).cast<Index>().prod();
 }
 
-/// Geometry of one step (level k+1 -> level k) on the regular grids.
+/// Node adjacency of a mesh's elements (nodes sharing an element), as CSR: the neighbours of
+/// node j are neighbours[first[j] .. first[j + 1]).
+struct NodeGraph {
+    std::vector<Index> first, neighbours;
+
+    NodeGraph() = default;
+    NodeGraph(const IndexMatrix& elements, Index nodes);
+    Index nodes() const { return static_cast<Index>(first.size()) - 1; }
+};
+
+/// The nodes within `rings` rings of `centre` in `graph` (graph distance), in order of distance
+/// (centre first). `mark` (#nodes, all 0) is used and left all 0.
+std::vector<Index> nodes_within(const NodeGraph& graph, Index centre, int rings,
+                                std::vector<char>& mark);
+
+/// Geometry of one step (level k+1 -> level k): on the regular grids, their cells; on level
+/// meshes, level k+1's node graph and the pivots.
 struct StepGeometry {
     int dim = 3;
-    Eigen::Vector3i fine_cells;    ///< cells of level k+1
-    Eigen::Vector3i coarse_cells;  ///< cells of level k
-    Eigen::Vector3d fine_spacing;  ///< cell size of level k+1
-    IndexVector fine_dofs;         ///< present DOFs of level k+1 (grid DOF indices, sorted)
-    IndexVector coarse_dofs;       ///< kept DOFs of level k (grid DOF indices, sorted)
+    Eigen::Vector3i fine_cells;    ///< cells of level k+1 (grids)
+    Eigen::Vector3i coarse_cells;  ///< cells of level k (grids)
+    Eigen::Vector3d fine_spacing;  ///< cell size of level k+1 (grids)
+    IndexVector fine_dofs;         ///< present DOFs of level k+1 (dim * node + d, sorted)
+    IndexVector coarse_dofs;       ///< kept DOFs of level k (dim * node + d, sorted)
+    /// Level meshes (null on grids): the node graph of level k+1, and the node of level k+1
+    /// each node of level k is centred at (pivot_nodes), around which its region grows.
+    const NodeGraph* fine_graph = nullptr;
+    std::vector<Index> pivots;
+
+    bool on_grid() const { return fine_graph == nullptr; }
+    Index fine_nodes() const;
+    Index coarse_nodes() const;
 };
 
 /// C̃ = C^† + Z W (Eq. 11) with Z from global solves (Algorithm 1 line 3: B Z^T = -R,
@@ -50,15 +74,17 @@ struct LocalizedRefinement {
 /// C̃^k = C^† + Z W (Eq. 11) with Z from localized solves (Sec. 3.5 "Fast computation"), each
 /// region's rows of C̃ formed from its solution directly (Z is never assembled: at 64^3 it held
 /// as many entries as C̃). For each coarse node i, the region
-/// R_i holds the level-(k+1) nodes within `rings` grid rings (Chebyshev distance) of the node
-/// coincident with i; S_i are the wavelets (rows of W) with a nonzero on a node of R_i; the rows
+/// R_i holds the level-(k+1) nodes within `rings` rings of the node coincident with i: grid
+/// rings (Chebyshev distance) on grids, rings of level k+1's node graph around the pivot of i
+/// on level meshes (the same nodes on a hex grid); S_i are the wavelets (rows of W) with a
+/// nonzero on a node of R_i; the rows
 /// of Z for the DOFs of node i solve B[S_i, S_i] z = -R[S_i, DOFs of i] and vanish outside S_i.
 ///
 /// Eq. 12 defect-driven radius (rings.defect_tolerance > 0): the rows of C̃ = C^† + Z W would
 /// satisfy C̃ A W^T = 0 with global solves; the local solve makes the defect vanish on S_i
 /// only. Each region starts at rings.start and doubles its rings until the relative defect
 /// max_r ||(C̃ A W^T)[r, :]|| / ||(C^† A W^T)[r, :]|| of its rows is at most the tolerance, or
-/// the rings reach rings.max, or the region covers the grid.
+/// the rings reach rings.max, or the region covers the level.
 ///
 /// Patch-wise localization: with patch > 1 the coarse nodes are grouped in blocks of patch^dim
 /// nodes (by grid coordinates, block index floor(c / patch) per axis) and every node of a block
@@ -67,9 +93,9 @@ struct LocalizedRefinement {
 /// regions coincide after clipping to the grid share one factorization; with patch = 1 this
 /// changes nothing but the cost. With `clip`, each node's rows of C̃ are formed from its block's
 /// solution on the wavelets of its own region only (Options::patch_clip), so that they have the
-/// support of patch 1. The regions are processed in parallel (OpenMP), each with its
-/// own dense (small) or sparse Cholesky factorization; regions of the same shape reuse the
-/// symbolic analysis.
+/// support of patch 1. Patches are grid blocks: on level meshes, patch must be 1. The regions are
+/// processed in parallel (OpenMP), each with its own dense (small) or sparse Cholesky
+/// factorization; regions of the same shape reuse the symbolic analysis.
 LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatrix& R,
                                          const SparseMatrix& C_dagger, const SparseMatrix& W,
                                          const StepGeometry& g, const LocalizationRings& rings,

@@ -278,11 +278,15 @@ void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels,
                   "mra: level mesh {} has {} nodes, more than the finer level's {}", k + 1,
                   m.num_nodes(), finer);
     }
-    for (const double r : options.radius)
-        CG_VERIFY(std::isinf(r),
-                  "mra: on level meshes the hierarchy is built with global solves (radius "
-                  "infinity), got radius {}",
-                  r);
+    const bool localized = std::any_of(options.radius.begin(), options.radius.end(),
+                                       [](double r) { return !std::isinf(r); });
+    CG_VERIFY(!localized || options.localization == Localization::Node,
+              "mra: on level meshes the localized solves are node-wise (localization \"node\"); "
+              "cell localization needs grids");
+    CG_VERIFY(!localized || options.patch == 1,
+              "mra: on level meshes the localized solves take one region per node (patch 1), got "
+              "patch {}",
+              options.patch);
     CG_VERIFY(options.measurement == Measurement::Canonical,
               "mra: stiffness-weighted measurements need nested grids; on level meshes use "
               "canonical measurements");
@@ -427,10 +431,15 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
     std::vector<Index> finest_next(static_cast<std::size_t>(mesh.num_nodes()));
     std::iota(finest_next.begin(), finest_next.end(), 0);
 
-    // Rings of the finer grid of a step in a finite radius (an infinite max_radius: 1e6).
-    const auto to_rings = [&](double radius) {
-        return static_cast<int>(std::min(std::floor(radius), 1e6)) *
-               (options.radius_grid == RadiusGrid::Coarse ? 2 : 1);
+    // Rings of the finer level of step k (building level k) in a finite radius (an infinite
+    // max_radius: 1e6); a radius on the coarser level's grid is scaled by the ratio of the
+    // levels' spacings (2 on grids, the ratio of mean edge lengths on level meshes).
+    const auto to_rings = [&](double radius, int k) {
+        const int rings = static_cast<int>(std::min(std::floor(radius), 1e6));
+        if (options.radius_grid == RadiusGrid::Fine) return rings;
+        if (on_grid) return 2 * rings;
+        const double ratio = spacing_of(k) / spacing_of(k + 1);
+        return static_cast<int>(std::min(std::round(rings * ratio), 1e6));
     };
     // A^{k+1} with both triangles, as the products take it: the fine operator, then a transient
     // copy of the level above (Level::A keeps the lower triangle).
@@ -455,6 +464,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         g.fine_dofs = dofs_next;
         // The node of level k+1 each node of level k refines to or is identified with.
         std::vector<Index> pivots;
+        detail::NodeGraph finer_graph;  // of level k+1, on level meshes
         {
             const Phase phase(tag + "canonical", &h.timings);
             RefinementOperators ops;
@@ -475,6 +485,9 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 const mesh::Mesh& finer =
                     k + 1 == q ? mesh : (*meshes)[static_cast<std::size_t>(k)];
                 pivots = pivot_nodes(coarse.rest_positions, finer.rest_positions);
+                finer_graph = detail::NodeGraph(finer.elements, finer.num_nodes());
+                g.fine_graph = &finer_graph;
+                g.pivots = pivots;
                 ops = local_refinement_operators(
                     options.refinement == Refinement::Linear
                         ? linear_refinement(coarse, finer.rest_positions)
@@ -505,7 +518,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             if (!by_cell || std::isinf(L.radius))
                 R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
         }
-        const int rings = std::isinf(L.radius) ? 0 : to_rings(L.radius);
+        const int rings = std::isinf(L.radius) ? 0 : to_rings(L.radius, k);
         SparseMatrix Ct;  // C̃^k while it is built and used here; kept as L.C_adapted (runs)
         if (std::isinf(L.radius)) {
             const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
@@ -527,7 +540,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             const Phase phase(tag + "C adapted (localized solves)", &h.timings);
             detail::LocalizationRings lr;
             lr.start = rings;
-            lr.max = std::max(rings, to_rings(options.max_radius));
+            lr.max = std::max(rings, to_rings(options.max_radius, k));
             lr.defect_tolerance = options.defect_tolerance;
             detail::LocalizedRefinement lz = detail::localized_refinement(
                 L.B, R, L.C_dagger, L.W, g, lr, options.patch, options.patch_clip);
@@ -603,10 +616,16 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                     : max_region_rings + (options.patch_clip ? 0 : 2 * (options.patch - 1)) +
                           linear;
             const Eigen::Vector3i nf = node_counts(fine_cells, dim);
+            std::vector<char> mark(on_grid ? 0 : static_cast<std::size_t>(fine_count), 0);
             for (Index i = 0; i < coarse_nodes && !std::isinf(L.radius); ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)
                     continue;
+                if (!on_grid) {
+                    for (const Index j : detail::nodes_within(finer_graph, pivots[i], reach, mark))
+                        skip[static_cast<std::size_t>(j)] = 1;
+                    continue;
+                }
                 const Eigen::Vector3i c = 2 * node_coordinates(i, L.cells, dim);
                 const Eigen::Vector3i lo = (c.array() - reach).max(0);
                 const Eigen::Vector3i hi = (c.array() + reach).min(nf.array() - 1);

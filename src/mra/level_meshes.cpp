@@ -10,10 +10,52 @@
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/mesh/point_locator.hpp"
+#include "detail.hpp"
 
 namespace coarsegrain::mra {
 
+namespace detail {
+
+NodeGraph::NodeGraph(const IndexMatrix& elements, Index nodes) {
+    std::vector<std::vector<Index>> lists(static_cast<std::size_t>(nodes));
+    for (Index e = 0; e < elements.rows(); ++e)
+        for (Index a = 0; a < elements.cols(); ++a)
+            for (Index b = 0; b < elements.cols(); ++b)
+                if (a != b) lists[elements(e, a)].push_back(elements(e, b));
+    first.push_back(0);
+    for (std::vector<Index>& l : lists) {
+        std::sort(l.begin(), l.end());
+        l.erase(std::unique(l.begin(), l.end()), l.end());
+        neighbours.insert(neighbours.end(), l.begin(), l.end());
+        first.push_back(static_cast<Index>(neighbours.size()));
+    }
+}
+
+std::vector<Index> nodes_within(const NodeGraph& graph, Index centre, int rings,
+                                std::vector<char>& mark) {
+    std::vector<Index> out{centre};
+    mark[static_cast<std::size_t>(centre)] = 1;
+    for (std::size_t begin = 0; rings > 0 && begin < out.size(); --rings) {
+        const std::size_t end = out.size();
+        for (std::size_t a = begin; a < end; ++a)
+            for (Index k = graph.first[out[a]]; k < graph.first[out[a] + 1]; ++k) {
+                const Index n = graph.neighbours[k];
+                if (!mark[static_cast<std::size_t>(n)]) {
+                    mark[static_cast<std::size_t>(n)] = 1;
+                    out.push_back(n);
+                }
+            }
+        begin = end;
+    }
+    for (const Index n : out) mark[static_cast<std::size_t>(n)] = 0;
+    return out;
+}
+
+}  // namespace detail
+
 namespace {
+
+using detail::NodeGraph;
 
 using Triplet = Eigen::Triplet<double, Index>;
 using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
@@ -97,26 +139,6 @@ class PointBuckets {
     double m_size = 1;
     std::array<int, 3> m_count{1, 1, 1};
     std::vector<Index> m_first, m_items;
-};
-
-/// Node adjacency of a mesh's elements (nodes sharing an element), as CSR.
-struct NodeGraph {
-    std::vector<Index> first, neighbours;
-
-    NodeGraph(const IndexMatrix& elements, Index nodes) {
-        std::vector<std::vector<Index>> lists(static_cast<std::size_t>(nodes));
-        for (Index e = 0; e < elements.rows(); ++e)
-            for (Index a = 0; a < elements.cols(); ++a)
-                for (Index b = 0; b < elements.cols(); ++b)
-                    if (a != b) lists[elements(e, a)].push_back(elements(e, b));
-        first.push_back(0);
-        for (std::vector<Index>& l : lists) {
-            std::sort(l.begin(), l.end());
-            l.erase(std::unique(l.begin(), l.end()), l.end());
-            neighbours.insert(neighbours.end(), l.begin(), l.end());
-            first.push_back(static_cast<Index>(neighbours.size()));
-        }
-    }
 };
 
 /// Row r of C^†: see local_refinement_operators. Returns (present fine DOF, value) pairs.

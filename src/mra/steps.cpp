@@ -78,6 +78,7 @@ struct RegionScratch {
     SparseMatrix b;
     std::vector<double> work;
     std::vector<Index> fine_position;  ///< adapted_rows' positions, sized on first use
+    std::vector<char> mark;            ///< nodes_within's marks on level meshes, sized on first use
     std::vector<solve::SpdSolver> solvers;
     std::vector<LocalOrder> orders;
 };
@@ -91,6 +92,14 @@ Index node_end(const IndexVector& dofs, int dim, Index j) {
 }
 
 }  // namespace
+
+Index StepGeometry::fine_nodes() const {
+    return on_grid() ? grid_nodes(fine_cells, dim) : fine_graph->nodes();
+}
+
+Index StepGeometry::coarse_nodes() const {
+    return on_grid() ? grid_nodes(coarse_cells, dim) : static_cast<Index>(pivots.size());
+}
 
 SparseMatrix global_adapted_refinement(const SparseMatrix& B, const SparseMatrix& R,
                                        const SparseMatrix& C_dagger, const SparseMatrix& W,
@@ -176,13 +185,43 @@ std::vector<Region> patch_regions(const std::vector<Index>& nodes, const StepGeo
     return regions;
 }
 
-/// Per level-(k+1) grid DOF, its index among the present DOFs g.fine_dofs (-1: absent).
+/// Regions of the localized solves on level meshes: one per node (patch 1).
+std::vector<Region> node_regions(std::size_t count) {
+    std::vector<Region> regions(count);
+    for (std::size_t n = 0; n < count; ++n) regions[n].members = {static_cast<Index>(n)};
+    return regions;
+}
+
+/// Per level-(k+1) DOF, its index among the present DOFs g.fine_dofs (-1: absent).
 std::vector<Index> fine_local_index(const StepGeometry& g) {
-    std::vector<Index> fine_local(static_cast<std::size_t>(g.dim * grid_nodes(g.fine_cells, g.dim)),
-                                  -1);
+    std::vector<Index> fine_local(static_cast<std::size_t>(g.dim * g.fine_nodes()), -1);
     for (Index l = 0; l < g.fine_dofs.size(); ++l)
         fine_local[static_cast<std::size_t>(g.fine_dofs[l])] = l;
     return fine_local;
+}
+
+/// Appends to S the wavelets (rows of W) with a nonzero on level-(k+1) node v not yet in it,
+/// marking them in local (0).
+void node_wavelets(const SparseMatrix& W, const std::vector<Index>& fine_local, int dim, Index v,
+                   std::vector<Index>& local, std::vector<Index>& S) {
+    for (int d = 0; d < dim; ++d) {
+        const Index l = fine_local[static_cast<std::size_t>(dim * v + d)];
+        if (l < 0) continue;
+        for (SparseMatrix::InnerIterator it(W, l); it; ++it) {
+            const Index w = static_cast<Index>(it.row());
+            if (local[static_cast<std::size_t>(w)] < 0) {
+                local[static_cast<std::size_t>(w)] = 0;
+                S.push_back(w);
+            }
+        }
+    }
+}
+
+/// Sorts S and sets local[w] to the position of w in S.
+void index_wavelets(std::vector<Index>& local, std::vector<Index>& S) {
+    std::sort(S.begin(), S.end());
+    for (std::size_t s = 0; s < S.size(); ++s)
+        local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
 }
 
 /// S: the wavelets (rows of W) with a nonzero on a level-(k+1) node of the box [lo, hi], sorted,
@@ -193,23 +232,9 @@ void box_wavelets(const SparseMatrix& W, const std::vector<Index>& fine_local,
     S.clear();
     for (int z = lo[2]; z <= hi[2]; ++z)
         for (int y = lo[1]; y <= hi[1]; ++y)
-            for (int x = lo[0]; x <= hi[0]; ++x) {
-                const Index v = x + nf[0] * (y + nf[1] * z);
-                for (int d = 0; d < dim; ++d) {
-                    const Index l = fine_local[static_cast<std::size_t>(dim * v + d)];
-                    if (l < 0) continue;
-                    for (SparseMatrix::InnerIterator it(W, l); it; ++it) {
-                        const Index w = static_cast<Index>(it.row());
-                        if (local[static_cast<std::size_t>(w)] < 0) {
-                            local[static_cast<std::size_t>(w)] = 0;
-                            S.push_back(w);
-                        }
-                    }
-                }
-            }
-    std::sort(S.begin(), S.end());
-    for (std::size_t s = 0; s < S.size(); ++s)
-        local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
+            for (int x = lo[0]; x <= hi[0]; ++x)
+                node_wavelets(W, fine_local, dim, x + nf[0] * (y + nf[1] * z), local, S);
+    index_wavelets(local, S);
 }
 
 /// nnz and a hash of the pattern of B[S, S] in S's order (local[w]: the position of wavelet w
@@ -494,8 +519,11 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
                                          const StepGeometry& g, const LocalizationRings& rings,
                                          int patch, bool clip) {
     const int dim = g.dim;
+    CG_VERIFY(g.on_grid() || (patch == 1 && !clip),
+              "mra: patch-wise localization needs grids (patch {} on level meshes)", patch);
     const Index nw = static_cast<Index>(W.rows());
-    const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
+    const Eigen::Vector3i nf =
+        g.on_grid() ? node_counts(g.fine_cells, dim) : Eigen::Vector3i::Ones().eval();
     const std::vector<Index> fine_local = fine_local_index(g);
     const bool adaptive = rings.defect_tolerance > 0 && rings.max > rings.start;
 
@@ -509,14 +537,32 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
         }
     }
     first.push_back(static_cast<Index>(g.coarse_dofs.size()));
-    const std::vector<Region> regions = patch_regions(nodes, g, rings.start, patch);
+    const std::vector<Region> regions =
+        g.on_grid() ? patch_regions(nodes, g, rings.start, patch) : node_regions(nodes.size());
     const Index num_regions = static_cast<Index>(regions.size());
+    // S: the wavelets on the nodes within r rings of the region's (sorted, indexed in local);
+    // returns whether those are all nodes of level k+1.
+    const auto region_wavelets = [&](const Region& region, int r, RegionScratch& scratch) {
+        if (g.on_grid()) {
+            const auto [lo, hi] = region.box(r, nf);
+            box_wavelets(W, fine_local, nf, dim, lo, hi, scratch.local, scratch.S);
+            return (lo.array() == 0).all() && (hi.array() == nf.array() - 1).all();
+        }
+        if (scratch.mark.empty()) scratch.mark.assign(static_cast<std::size_t>(g.fine_nodes()), 0);
+        const Index centre = g.pivots[static_cast<std::size_t>(
+            nodes[static_cast<std::size_t>(region.members.front())])];
+        const std::vector<Index> ball = nodes_within(*g.fine_graph, centre, r, scratch.mark);
+        scratch.S.clear();
+        for (const Index v : ball) node_wavelets(W, fine_local, dim, v, scratch.local, scratch.S);
+        index_wavelets(scratch.local, scratch.S);
+        return static_cast<Index>(ball.size()) == g.fine_nodes();
+    };
 
     const SparseMatrix Wt = W.transpose();
     const RowSparse Cd = C_dagger;
     const Index num_fine = static_cast<Index>(W.cols());
     LocalizedRefinement out;
-    out.rings.assign(static_cast<std::size_t>(grid_nodes(g.coarse_cells, dim)), 0);
+    out.rings.assign(static_cast<std::size_t>(g.coarse_nodes()), 0);
     // Per node (an index into `nodes`), the rows of C̃ it holds: a region's rows at its first
     // member, or each member's own rows when clipped.
     std::vector<RegionSolution> solutions(nodes.size());
@@ -534,8 +580,7 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
         Matrix x;
         int r = rings.start;
         for (std::size_t attempt = 0;; ++attempt) {
-            const auto [lo, hi] = region.box(r, nf);
-            box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
+            const bool whole = region_wavelets(region, r, scratch);
             const Index ns = static_cast<Index>(S.size());
             // The right-hand sides R[S, rows].
             Matrix rhs = Matrix::Zero(ns, nr);
@@ -548,7 +593,6 @@ LocalizedRefinement localized_refinement(const SparseMatrix& B, const SparseMatr
             x = ns > 0 ? solve_region(B, S, local, rhs, dim, scratch, attempt) : Matrix(0, nr);
             for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
             if (ns == 0) break;  // no wavelet near: the rows are C^†'s
-            const bool whole = (lo.array() == 0).all() && (hi.array() == nf.array() - 1).all();
             if (!adaptive || r >= rings.max || whole ||
                 orthogonality_defect(B, R, x, rows, S, scratch.work) <= rings.defect_tolerance)
                 break;

@@ -146,38 +146,139 @@ TEST_P(LevelMeshes, MultilevelSolveReproducesFineSolve) {
 }
 
 TEST_P(LevelMeshes, InvarianceCorrectionReproducesRigidMotions) {
-    // With the conditions ignored by the construction (the blind treatment) the correction
-    // applies to every column: C̃^{k,T} Rig^k = Rig^{k+1} at every level, the rigid motions of
-    // the fine nodes carried by the measurements Rig^k = C^k Rig^{k+1}. Each column's
-    // correction is a least-squares solve of at most 6 unknowns: 1e-10 relative.
+    // C̃^{k,T} Rig^k = Rig^{k+1} on every corrected column, the rigid motions of the fine nodes
+    // carried by the measurements Rig^k = C^k Rig^{k+1}. Each column's correction is a
+    // least-squares solve of at most 6 unknowns: 1e-10 relative. With the conditions ignored by
+    // the construction (the blind treatment) every column is corrected; constrained, those
+    // away from the Dirichlet nodes (Sec. 3.5), for global and localized solves.
     const test::GridProblem p = problem();
-    Options o;
-    o.levels = 3;
-    o.refinement = refinement();
-    o.dirichlet = DirichletTreatment::Ignore;
-    const Hierarchy h = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
-    const int m = dim() == 3 ? 6 : 3;
-    Matrix rig = Matrix::Zero(h.fine_dofs.size(), m);
-    for (Index a = 0; a < h.fine_dofs.size(); ++a) {
-        const int c = h.fine_dofs[a] % dim();
-        const Eigen::VectorXd x = p.mesh.rest_positions.row(h.fine_dofs[a] / dim()).transpose();
-        rig(a, c) = 1;
-        if (dim() == 2) {
-            rig(a, 2) = c == 0 ? -x[1] : x[0];
-        } else {  // u = e_r x x for r = 0, 1, 2
-            for (int r = 0; r < 3; ++r) {
-                Eigen::Vector3d e = Eigen::Vector3d::Zero();
-                e[r] = 1;
-                rig(a, 3 + r) = e.cross(Eigen::Vector3d(x[0], x[1], x[2]))[c];
+    const double inf = std::numeric_limits<double>::infinity();
+    for (const DirichletTreatment t : {DirichletTreatment::Ignore, DirichletTreatment::Constrain})
+        for (const double radius : {inf, 2.0}) {
+            Options o;
+            o.levels = 3;
+            o.refinement = refinement();
+            o.dirichlet = t;
+            o.radius = {radius};
+            const Hierarchy h = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
+            const int m = dim() == 3 ? 6 : 3;
+            Matrix rig = Matrix::Zero(h.fine_dofs.size(), m);
+            for (Index a = 0; a < h.fine_dofs.size(); ++a) {
+                const int c = h.fine_dofs[a] % dim();
+                const Eigen::VectorXd x =
+                    p.mesh.rest_positions.row(h.fine_dofs[a] / dim()).transpose();
+                rig(a, c) = 1;
+                if (dim() == 2) {
+                    rig(a, 2) = c == 0 ? -x[1] : x[0];
+                } else {  // u = e_r x x for r = 0, 1, 2
+                    for (int r = 0; r < 3; ++r) {
+                        Eigen::Vector3d e = Eigen::Vector3d::Zero();
+                        e[r] = 1;
+                        rig(a, 3 + r) = e.cross(Eigen::Vector3d(x[0], x[1], x[2]))[c];
+                    }
+                }
+            }
+            const double scale = max_abs(rig);
+            for (int k = h.num_levels() - 1; k >= 1; --k) {
+                const Level& L = h.level(k);
+                const IndexVector& finer_dofs =
+                    k + 1 == h.num_levels() ? h.fine_dofs : h.level(k + 1).dofs;
+                const Matrix coarse = L.C * rig;
+                const Matrix error = L.C_adapted.sparse().transpose() * coarse - rig;
+                Index corrected = 0;
+                for (Index a = 0; a < error.rows(); ++a)
+                    if (L.invariance_applied[finer_dofs[a] / dim()]) {
+                        ++corrected;
+                        EXPECT_LT(max_abs(error.row(a)), 1e-10 * scale)
+                            << dirichlet_name(t) << " radius " << radius << " level " << k;
+                    }
+                if (t == DirichletTreatment::Ignore)
+                    EXPECT_EQ(corrected, error.rows()) << "radius " << radius << " level " << k;
+                else if (radius < inf && k + 1 == h.num_levels())  // (the coarsest step's
+                    EXPECT_GT(corrected, 0);  // supports all reach a Dirichlet node)
+                rig = coarse;
             }
         }
+}
+
+/// Finer-level nodes within `rings` rings of `centre` in the graph of `elements` (nodes sharing
+/// an element), by breadth-first search.
+std::vector<Index> ring_nodes(const IndexMatrix& elements, Index nodes, Index centre, int rings) {
+    std::vector<std::vector<Index>> adjacent(static_cast<std::size_t>(nodes));
+    for (Index e = 0; e < elements.rows(); ++e)
+        for (Index a = 0; a < elements.cols(); ++a)
+            for (Index b = 0; b < elements.cols(); ++b)
+                adjacent[elements(e, a)].push_back(elements(e, b));
+    std::vector<int> distance(static_cast<std::size_t>(nodes), -1);
+    std::vector<Index> out{centre};
+    distance[static_cast<std::size_t>(centre)] = 0;
+    for (std::size_t a = 0; a < out.size(); ++a)
+        for (const Index n : adjacent[static_cast<std::size_t>(out[a])])
+            if (distance[static_cast<std::size_t>(n)] < 0 &&
+                distance[static_cast<std::size_t>(out[a])] < rings) {
+                distance[static_cast<std::size_t>(n)] =
+                    distance[static_cast<std::size_t>(out[a])] + 1;
+                out.push_back(n);
+            }
+    return out;
+}
+
+TEST_P(LevelMeshes, LocalizedSolvesOverTheWholeLevelAreTheGlobalSolves) {
+    // Regions of more rings than the finer levels' graph diameters hold every wavelet: each
+    // region's solve is the global solve restricted to its rows' columns, so C̃ is the global
+    // one up to the round-off of two sparse Cholesky solves (1e-10 relative).
+    const test::GridProblem p = problem();
+    for (Options o : exact_level_options(refinement())) {
+        const Hierarchy global = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
+        o.radius = {40};
+        const Hierarchy local = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
+        for (int k = 1; k < global.num_levels(); ++k) {
+            const SparseMatrix G = global.level(k).C_adapted.sparse();
+            const SparseMatrix L = local.level(k).C_adapted.sparse();
+            EXPECT_LT(Matrix(G - L).cwiseAbs().maxCoeff(), 1e-10 * Matrix(G).cwiseAbs().maxCoeff())
+                << "level " << k;
+            EXPECT_EQ(local.level(k).region_rings.size(), local.level(k).dirichlet_nodes.size());
+        }
     }
-    for (int k = h.num_levels() - 1; k >= 1; --k) {
+}
+
+TEST_P(LevelMeshes, LocalizedRowsAreAOrthogonalToTheWaveletsOfTheirRegion) {
+    // Node localization (Sec. 3.5) on level meshes: the rows of C̃ of coarse node i solve
+    // B z = -R on the wavelets S_i with a nonzero within rho rings (the finer mesh's graph) of
+    // i's pivot, so Eq. 12 holds on S_i, (C̃ A W^T)[r, S_i] = 0, to a dense or sparse
+    // Cholesky solve's round-off (1e-10 relative to |C̃_r| |A| |W|), and not beyond.
+    const test::GridProblem p = problem();
+    const std::vector<mesh::Mesh> levels = non_nested_levels(dim());
+    for (Options o : exact_level_options(refinement())) {
+        o.radius = {1};
+        const Hierarchy h = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
+        const int k = h.num_levels() - 1;  // the fine step
         const Level& L = h.level(k);
-        const Matrix coarse = L.C * rig;
-        const Matrix back = L.C_adapted.sparse().transpose() * coarse;
-        EXPECT_LT(max_abs(back - rig), 1e-10 * max_abs(rig)) << "level " << k;
-        rig = coarse;
+        const SparseMatrix Ct = L.C_adapted.sparse();
+        const Matrix CAWt = Matrix(Ct * h.A_fine * SparseMatrix(L.W.transpose()));
+        const std::vector<Index> pivots =
+            pivot_nodes(levels[1].rest_positions, levels[2].rest_positions);
+        std::vector<Index> local(static_cast<std::size_t>(p.mesh.num_dofs()), -1);
+        for (Index l = 0; l < h.fine_dofs.size(); ++l) local[h.fine_dofs[l]] = l;
+        double outside = 0;
+        for (Index r = 0; r < L.dofs.size(); ++r) {
+            std::vector<char> in_region(static_cast<std::size_t>(L.W.rows()), 0);
+            for (const Index v :
+                 ring_nodes(p.mesh.elements, p.mesh.num_nodes(), pivots[L.dofs[r] / dim()], 1))
+                for (int d = 0; d < dim(); ++d)
+                    if (const Index l = local[dim() * v + d]; l >= 0)
+                        for (SparseMatrix::InnerIterator it(L.W, l); it; ++it)
+                            in_region[it.row()] = 1;
+            const double scale = Ct.row(r).norm() * h.A_fine.norm() * L.W.norm();
+            for (Index w = 0; w < L.W.rows(); ++w) {
+                if (in_region[w])
+                    EXPECT_LT(std::abs(CAWt(r, w)), 1e-10 * scale)
+                        << "row " << r << " wavelet " << w;
+                else
+                    outside = std::max(outside, std::abs(CAWt(r, w)) / scale);
+            }
+        }
+        EXPECT_GT(outside, 1e-8) << "the regions should not hold every wavelet at radius 1";
     }
 }
 
@@ -288,8 +389,14 @@ TEST(LevelMeshHierarchy, BadInputIsAnError) {
                        "2 coarser level meshes for levels = 2");
     o.levels = 3;
     o.radius = {2};
+    o.patch = 2;
     test::expect_error([&] { build_hierarchy(levels, p.mesh, p.K, p.bc.dofs, o); },
-                       "global solves (radius infinity), got radius 2");
+                       "one region per node (patch 1), got patch 2");
+    o.patch = 1;
+    o.localization = Localization::Cell;
+    test::expect_error([&] { build_hierarchy(levels, p.mesh, p.K, p.bc.dofs, o); },
+                       "cell localization needs grids");
+    o.localization = Localization::Node;
     o.radius = {std::numeric_limits<double>::infinity()};
     std::vector<mesh::Mesh> quads = levels;
     quads[0] = mesh::make_grid(ElementType::Quad4, Eigen::Vector2d::Zero(), Eigen::Vector2d::Ones(),
