@@ -258,6 +258,22 @@ double mean_edge_length(const mesh::Mesh& m) {
 
 }  // namespace
 
+void validate_level_mesh_options(const Options& options) {
+    validate(options);
+    const bool localized = std::any_of(options.radius.begin(), options.radius.end(),
+                                       [](double r) { return !std::isinf(r); });
+    CG_VERIFY(!localized || options.localization == Localization::Node,
+              "mra: on level meshes the localized solves are node-wise (localization \"node\"); "
+              "cell localization needs grids");
+    CG_VERIFY(!localized || options.patch == 1,
+              "mra: on level meshes the localized solves take one region per node (patch 1), got "
+              "patch {}",
+              options.patch);
+    CG_VERIFY(options.measurement == Measurement::Canonical,
+              "mra: stiffness-weighted measurements need nested grids; on level meshes use "
+              "canonical measurements");
+}
+
 void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels,
                            const mesh::Mesh& fine_mesh, const Options& options) {
     const int dim = fine_mesh.dim();
@@ -278,18 +294,7 @@ void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels,
                   "mra: level mesh {} has {} nodes, more than the finer level's {}", k + 1,
                   m.num_nodes(), finer);
     }
-    const bool localized = std::any_of(options.radius.begin(), options.radius.end(),
-                                       [](double r) { return !std::isinf(r); });
-    CG_VERIFY(!localized || options.localization == Localization::Node,
-              "mra: on level meshes the localized solves are node-wise (localization \"node\"); "
-              "cell localization needs grids");
-    CG_VERIFY(!localized || options.patch == 1,
-              "mra: on level meshes the localized solves take one region per node (patch 1), got "
-              "patch {}",
-              options.patch);
-    CG_VERIFY(options.measurement == Measurement::Canonical,
-              "mra: stiffness-weighted measurements need nested grids; on level meshes use "
-              "canonical measurements");
+    validate_level_mesh_options(options);
 }
 
 namespace {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "coarsegrain/mra/hierarchy.hpp"
 #include "coarsegrain/scene/scene.hpp"
 #include "json_reader.hpp"
 
@@ -105,12 +106,11 @@ mra::Options parse_mra(const JsonReader& r) {
         r.fail("{}", e.what());
     }
     if (auto v = r.find("level_meshes")) {
-        v->fail_unless(
-            std::all_of(o.radius.begin(), o.radius.end(), [](double x) { return std::isinf(x); }),
-            "the hierarchy on level meshes is built with global solves: leave out "
-            "coarse.radius (or set it to \"inf\")");
-        v->fail_unless(o.measurement == Measurement::Canonical,
-                       "the hierarchy on level meshes needs coarse.measurement \"canonical\"");
+        try {
+            validate_level_mesh_options(o);
+        } catch (const Error& e) {
+            v->fail("{}", e.what());
+        }
     }
     return o;
 }

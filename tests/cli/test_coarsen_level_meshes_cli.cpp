@@ -18,44 +18,61 @@ using ::testing::HasSubstr;
 
 namespace {
 
-/// A triangle grid with n x n cells over [0, 1]^2 scaled by `scale` about its centre, interior
-/// nodes moved by up to `distortion` of a cell, written to dir/name.
-std::string write_triangles(const std::string& dir, const std::string& name, int n,
+/// A simplex grid (triangles or tetrahedra) with n cells per axis over [0, 1]^dim scaled by
+/// `scale` about its centre, interior nodes moved by up to `distortion` of a cell, written to
+/// dir/name.
+std::string write_simplices(const std::string& dir, const std::string& name, int dim, int n,
                             double distortion, double scale, unsigned seed) {
-    const Eigen::Vector2d centre(0.5, 0.5), half = Eigen::Vector2d::Constant(0.5 * scale);
-    mesh::Mesh m = mesh::make_grid(mesh::ElementType::Tri3, centre - half, centre + half,
-                                   Eigen::Vector2i(n, n));
+    const Eigen::VectorXd centre = Eigen::VectorXd::Constant(dim, 0.5);
+    const Eigen::VectorXd half = Eigen::VectorXd::Constant(dim, 0.5 * scale);
+    mesh::Mesh m = mesh::make_grid(dim == 2 ? mesh::ElementType::Tri3 : mesh::ElementType::Tet4,
+                                   centre - half, centre + half, Eigen::VectorXi::Constant(dim, n));
     distort_interior(m, distortion, seed);
     io::write_mesh(dir + "/" + name, m);
     return name;
 }
 
-/// The layered square (soft E = 100 and stiff E = 1e5 layers 1/8 thick, 24 x 24 cells of
-/// triangles) hung from its top under gravity; coarse.mesh and the hierarchy's coarsest level
-/// are one 3 x 3 triangle mesh 2% larger than the object, its middle level a distorted 7 x 7
-/// one: no level is nested in another.
-json layered_level_scene(const std::string& dir) {
-    const std::string coarse = write_triangles(dir, "coarse.msh", 3, 0.2, 1.02, 1);
-    const std::string middle = write_triangles(dir, "middle.msh", 7, 0.2, 1.0, 2);
+/// The layered square or cube (soft E = 100 and stiff E = 1e5 layers 1/8 thick along y, 24^2
+/// cells of triangles or 12^3 of tetrahedra) hung from its top under gravity; coarse.mesh and
+/// the hierarchy's coarsest level are one mesh of 3 cells per axis 2% larger than the object,
+/// its middle level a distorted one of 7 (2D) or 5 (3D): no level is nested in another.
+json layered_level_scene(const std::string& dir, int dim = 2) {
+    const std::string coarse = write_simplices(dir, "coarse.msh", dim, 3, 0.2, 1.02, 1);
+    const std::string middle =
+        write_simplices(dir, "middle.msh", dim, dim == 2 ? 7 : 5, 0.2, 1.0, 2);
+    const int n = dim == 2 ? 24 : 12;
+    json grid = {{"min", json::array()},
+                 {"max", json::array()},
+                 {"cells", json::array()},
+                 {"element", dim == 2 ? "tri" : "tet"}};
+    json box_min = json::array(), box_max = json::array(), gravity = json::array();
+    for (int d = 0; d < dim; ++d) {
+        grid["min"].push_back(0);
+        grid["max"].push_back(1);
+        grid["cells"].push_back(n);
+        box_min.push_back(d == 1 ? 0.999999 : -1);
+        box_max.push_back(2);
+        gravity.push_back(d == 1 ? -1 : 0);
+    }
     return {
-        {"dimension", 2},
-        {"mesh",
-         {{"grid", {{"min", {0, 0}}, {"max", {1, 1}}, {"cells", {24, 24}}, {"element", "tri"}}}}},
+        {"dimension", dim},
+        {"mesh", {{"grid", grid}}},
         {"material_field", {{"layers", {{"axis", "y"}, {"thickness", 0.125}, {"ids", {1, 2}}}}}},
         {"materials",
          {{"1", {{"E", 100}, {"nu", 0.3}, {"density", 1}}},
           {"2", {{"E", 1e5}, {"nu", 0.3}, {"density", 1}}}}},
-        {"dirichlet", {{{"box", {{"min", {-1, 0.999999}}, {"max", {2, 2}}}}}}},
-        {"loads", {{"gravity", {0, -1}}}},
+        {"dirichlet", {{{"box", {{"min", box_min}, {"max", box_max}}}}}},
+        {"loads", {{"gravity", gravity}}},
         {"coarse", {{"mesh", {{"file", coarse}}}, {"level_meshes", {coarse, middle}}}}};
 }
 
-// `--method all` with one coarse mesh runs both papers' methods on it. The hierarchy's coarsest
+// `--method all` with one coarse mesh runs both papers' methods on it (2D: the layered square,
+// 3D: the layered cube as tetrahedra). The hierarchy's coarsest
 // level spans the same P1 space of the coarse mesh's nodes as the effective tensors' model, but
 // adapted to the layers: it must beat the effective tensors and every baseline in every error.
-TEST(CliCoarsenLevelMeshes, BothPapersOnOneCoarseMesh) {
-    const std::string dir = temp_dir("cli_level_meshes");
-    const Result r = cli("coarsen " + write_scene(dir, layered_level_scene(dir)) +
+void expect_hierarchy_beats_the_effective_tensors(int dim) {
+    const std::string dir = temp_dir("cli_level_meshes_" + std::to_string(dim) + "d");
+    const Result r = cli("coarsen " + write_scene(dir, layered_level_scene(dir, dim)) +
                          " --method all --out " + dir + "/out");
     ASSERT_EQ(r.code, 0) << r.output;
     const json s = read_json(dir + "/out/summary.json");
@@ -74,8 +91,9 @@ TEST(CliCoarsenLevelMeshes, BothPapersOnOneCoarseMesh) {
     // The level report: the levels' meshes, no grid cells, no cell tensors.
     const json m = read_json(dir + "/out/mra-linear/summary.json");
     const json& level1 = m["coarse"]["levels"][0];
-    EXPECT_EQ(level1["nodes"], 16);     // 4 x 4 nodes of the coarse mesh
-    EXPECT_EQ(level1["elements"], 18);  // its 3 x 3 x 2 triangles
+    const mesh::Mesh coarse = io::read_mesh(dir + "/coarse.msh");
+    EXPECT_EQ(level1["nodes"], coarse.num_nodes());
+    EXPECT_EQ(level1["elements"], coarse.num_elements());
     EXPECT_TRUE(level1["cells"].empty());
     EXPECT_THAT(m["coarse"]["coarsest_cells"]["skipped"].get<std::string>(),
                 HasSubstr("the coarsest level is a mesh"));
@@ -93,6 +111,14 @@ TEST(CliCoarsenLevelMeshes, BothPapersOnOneCoarseMesh) {
         }
         EXPECT_LT(previous, 1e-12) << method;
     }
+}
+
+TEST(CliCoarsenLevelMeshes, BothPapersOnOneCoarseMeshLayeredSquare) {
+    expect_hierarchy_beats_the_effective_tensors(2);
+}
+
+TEST(CliCoarsenLevelMeshes, BothPapersOnOneCoarseMeshLayeredCube) {
+    expect_hierarchy_beats_the_effective_tensors(3);
 }
 
 TEST(CliCoarsenLevelMeshes, BadLevelsAreErrorsBeforeAnyWork) {
@@ -116,7 +142,10 @@ TEST(CliCoarsenLevelMeshes, BadLevelsAreErrorsBeforeAnyWork) {
     expect_error(scene, "coarse.level_meshes: 2 meshes for coarse.levels = 2");
     scene = good;
     scene["coarse"]["radius"] = 3;
-    expect_error(scene, "coarse.level_meshes: the hierarchy on level meshes is built with global");
+    scene["coarse"]["patch"] = 2;
+    expect_error(scene,
+                 "coarse.level_meshes: mra: on level meshes the localized solves take one "
+                 "region per node (patch 1), got patch 2");
     scene = good;
     scene["coarse"]["level_meshes"] = {"missing.msh"};
     expect_error(scene, "coarse.level_meshes[0]: file");

@@ -138,22 +138,28 @@ Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
 /// Builds the material-adapted hierarchy on simplicial level meshes (Algorithm 1), nested or not:
 /// the canonical operators of level_meshes.hpp (linear_refinement or, for Dirac refinement, the
 /// selection of pivot_nodes; local_refinement_operators), then the steps of the grid
-/// construction with global solves. The nodes of level k < q are those of coarser_levels[k-1],
-/// those of level q the fine mesh's; a node of a coarser level lies on the Dirichlet boundary
-/// when its chain of pivots ends on a fixed fine node.
+/// construction: global solves, or node-wise localized ones whose regions are rings of the
+/// finer level's node graph around each coarse node's pivot. The nodes of level k < q are those
+/// of coarser_levels[k-1], those of level q the fine mesh's; a node of a coarser level lies on
+/// the Dirichlet boundary when its chain of pivots ends on a fixed fine node.
 ///
 /// @param[in] coarser_levels  levels 1..q-1, coarsest first, simplicial (triangles or
 ///                            tetrahedra), with no more nodes than the next finer level
 /// @param[in] fine_mesh       level q: any element type (only its nodes are used)
 /// @param[in] K, fixed_dofs   as build_hierarchy on a grid, over the fine mesh's DOFs
-/// @param[in] options         levels = coarser_levels.size() + 1; global solves (radius
-///                            infinity) and canonical measurements
+/// @param[in] options         levels = coarser_levels.size() + 1; validate_level_mesh_options
 /// @throws Error if the meshes or options do not meet the above, a local left inverse does not
 ///         exist (local_refinement_operators), or a wavelet stiffness B^k is not positive
 ///         definite
 Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& coarser_levels,
                           const mesh::Mesh& fine_mesh, const SparseMatrix& K,
                           const std::vector<Index>& fixed_dofs, const Options& options);
+
+/// The checks build_hierarchy makes on the options of a hierarchy on level meshes: those of
+/// validate(options); localized solves (finite radius) node-wise with patch 1; canonical
+/// measurements.
+/// @throws Error saying what was expected
+void validate_level_mesh_options(const Options& options);
 
 /// The checks build_hierarchy makes on level meshes and their options, for a scene to make them
 /// before any work.
