@@ -256,6 +256,24 @@ double mean_edge_length(const mesh::Mesh& m) {
     return sum / static_cast<double>(count);
 }
 
+/// On level meshes, the support a localized row of C̃ of a coarse node with pivot `pivot` would
+/// have (for the invariance correction's skip set, when the node's DOFs were eliminated and it
+/// has no row): the finer nodes within `rings` rings of the pivot in `graph`, and those of every
+/// wavelet (row of W, Wt = W^T) with a nonzero there. W's columns are the present DOFs
+/// `dofs` (dim * node + d, sorted); `mark` (#nodes, all 0) is left so.
+void mark_region_support(const detail::NodeGraph& graph, Index pivot, int rings,
+                         const SparseMatrix& W, const SparseMatrix& Wt, const IndexVector& dofs,
+                         int dim, std::vector<char>& mark, std::vector<char>& skip) {
+    for (const Index j : detail::nodes_within(graph, pivot, rings, mark)) {
+        skip[static_cast<std::size_t>(j)] = 1;
+        const Index* first = std::lower_bound(dofs.data(), dofs.data() + dofs.size(), dim * j);
+        for (Index l = first - dofs.data(); l < dofs.size() && dofs[l] / dim == j; ++l)
+            for (SparseMatrix::InnerIterator w(W, l); w; ++w)
+                for (SparseMatrix::InnerIterator it(Wt, w.row()); it; ++it)
+                    skip[static_cast<std::size_t>(dofs[it.row()] / dim)] = 1;
+    }
+}
+
 }  // namespace
 
 void validate_level_mesh_options(const Options& options) {
@@ -585,7 +603,8 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             // such a node (the paper's rule, read off the pattern after the solves and the
             // truncation). A boundary node whose DOFs were eliminated has no row: its support is
             // taken as geometric, within `reach` rings (the region R_i, plus one ring for the
-            // wavelets of the linear refinement; every node for global solves).
+            // wavelets of the linear refinement; every node for global solves); on level meshes
+            // the region's nodes and those of its wavelets (mark_region_support).
             std::vector<char> skip(static_cast<std::size_t>(fine_count), 0);
             std::vector<int> present_count(static_cast<std::size_t>(fine_count), 0);
             for (Index l = 0; l < dofs_next.size(); ++l)
@@ -622,13 +641,15 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                           linear;
             const Eigen::Vector3i nf = node_counts(fine_cells, dim);
             std::vector<char> mark(on_grid ? 0 : static_cast<std::size_t>(fine_count), 0);
+            SparseMatrix Wt;  // W by rows, on level meshes
             for (Index i = 0; i < coarse_nodes && !std::isinf(L.radius); ++i) {
                 if (!L.dirichlet_nodes[static_cast<std::size_t>(i)] ||
                     kept_count[static_cast<std::size_t>(i)] == dim)
                     continue;
                 if (!on_grid) {
-                    for (const Index j : detail::nodes_within(finer_graph, pivots[i], reach, mark))
-                        skip[static_cast<std::size_t>(j)] = 1;
+                    if (Wt.size() == 0) Wt = L.W.transpose();
+                    mark_region_support(finer_graph, pivots[i], max_region_rings, L.W, Wt,
+                                        dofs_next, dim, mark, skip);
                     continue;
                 }
                 const Eigen::Vector3i c = 2 * node_coordinates(i, L.cells, dim);
