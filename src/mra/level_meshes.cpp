@@ -144,15 +144,87 @@ class PointBuckets {
 /// Row r of C^†: see local_refinement_operators. Returns (present fine DOF, value) pairs.
 class LeftInverseRow {
   public:
-    LeftInverseRow(const SparseMatrix& cols, const NodeGraph& graph,
+    LeftInverseRow(const SparseMatrix& cols, const RowMajor& rows, const NodeGraph& graph,
                    const std::vector<Index>& fine_local, const std::vector<Index>& coarse_local,
                    int dim)
-        : m_cols(cols), m_graph(graph), m_fine(fine_local), m_coarse(coarse_local), m_dim(dim) {}
+        : m_cols(cols),
+          m_rows(rows),
+          m_graph(graph),
+          m_fine(fine_local),
+          m_coarse(coarse_local),
+          m_dim(dim) {}
 
     /// Largest number of rings of the finer level's graph around the pivot.
     static constexpr int kMaxRings = 8;
+    /// Smallest reciprocal condition number (singular values) of a cell's system.
+    static constexpr double kMinCellRcond = 1e-3;
 
     std::vector<std::pair<Index, double>> operator()(Index i, int d, Index pivot) const {
+        std::vector<std::pair<Index, double>> out = cell_row(i, d);
+        return out.empty() ? ring_row(i, d, pivot) : out;
+    }
+
+  private:
+    /// Kept coarse nodes (component d) whose refinement is nonzero at fine node j, sorted.
+    std::vector<Index> support(Index j, int d) const {
+        std::vector<Index> K;
+        for (SparseMatrix::InnerIterator it(m_cols, j); it; ++it)
+            if (m_coarse[m_dim * it.row() + d] >= 0) K.push_back(static_cast<Index>(it.row()));
+        std::sort(K.begin(), K.end());
+        return K;
+    }
+
+    /// The row on the fewest fine nodes whose refinement columns share one support Σ ∋ i (the
+    /// kept vertices of a coarse element, or of one of its faces or edges: the fine nodes in
+    /// it): the |Σ| best conditioned (column-pivoted QR of C[Σ, group]), with c solving
+    /// C[Σ, nodes] c = e_i; every other row of C vanishes there, so C c = e_i. Among the
+    /// supports with a system of reciprocal condition at least kMinCellRcond, the smallest,
+    /// then the best conditioned. Empty if none.
+    std::vector<std::pair<Index, double>> cell_row(Index i, int d) const {
+        std::map<std::vector<Index>, std::vector<Index>> groups;  // Σ -> its fine nodes
+        for (RowMajor::InnerIterator it(m_rows, i); it; ++it)
+            if (present(static_cast<Index>(it.col()), d))
+                groups[support(static_cast<Index>(it.col()), d)].push_back(
+                    static_cast<Index>(it.col()));
+        std::vector<std::pair<Index, double>> best;
+        std::size_t best_size = 0;
+        double best_rcond = 0;
+        for (const auto& [sigma, nodes] : groups) {
+            if (nodes.size() < sigma.size() || (!best.empty() && sigma.size() > best_size))
+                continue;
+            // The |Σ| best conditioned of the group's columns C[Σ, nodes] (column-pivoted QR).
+            const Index n = static_cast<Index>(sigma.size());
+            Matrix G(n, static_cast<Index>(nodes.size()));
+            for (Index a = 0; a < n; ++a)
+                for (Index b = 0; b < G.cols(); ++b) G(a, b) = m_cols.coeff(sigma[a], nodes[b]);
+            const Eigen::ColPivHouseholderQR<Matrix> qr(G);
+            std::vector<Index> chosen;
+            Matrix M(n, n);
+            for (Index b = 0; b < n; ++b) {
+                chosen.push_back(nodes[qr.colsPermutation().indices()[b]]);
+                M.col(b) = G.col(qr.colsPermutation().indices()[b]);
+            }
+            const Vector sv = Eigen::JacobiSVD<Matrix>(M).singularValues();
+            const double rcond = sv[n - 1] / sv[0];
+            if (rcond < kMinCellRcond ||
+                (!best.empty() && sigma.size() == best_size && rcond <= best_rcond))
+                continue;
+            Vector target = Vector::Zero(n);
+            target[std::lower_bound(sigma.begin(), sigma.end(), i) - sigma.begin()] = 1;
+            const Vector c = M.partialPivLu().solve(target);
+            if ((M * c - target).lpNorm<Eigen::Infinity>() > 1e-12) continue;
+            best.clear();
+            for (Index b = 0; b < n; ++b)
+                if (c[b] != 0) best.emplace_back(m_fine[m_dim * chosen[b] + d], c[b]);
+            best_size = sigma.size();
+            best_rcond = rcond;
+        }
+        return best;
+    }
+
+    /// The row as the smallest change of the injection at the pivot on the fewest rings around
+    /// it that admit an exact solution.
+    std::vector<std::pair<Index, double>> ring_row(Index i, int d, Index pivot) const {
         std::vector<Index> S{pivot}, ring{pivot};  // fine nodes: the region and its last ring
         for (int rings = 0;; ++rings) {
             std::sort(S.begin(), S.end());
@@ -207,10 +279,10 @@ class LeftInverseRow {
         }
     }
 
-  private:
     bool present(Index node, int d) const { return m_fine[m_dim * node + d] >= 0; }
 
     const SparseMatrix& m_cols;
+    const RowMajor& m_rows;
     const NodeGraph& m_graph;
     const std::vector<Index>& m_fine;
     const std::vector<Index>& m_coarse;
@@ -367,7 +439,7 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
     ops.C.setFromTriplets(t.begin(), t.end());
 
     const NodeGraph graph(fine_elements, C_node.cols());
-    const LeftInverseRow left_inverse(C_node, graph, fine_local, coarse_local, dim);
+    const LeftInverseRow left_inverse(C_node, rows, graph, fine_local, coarse_local, dim);
     std::vector<std::vector<std::pair<Index, double>>> dagger(static_cast<std::size_t>(nk));
 #pragma omp parallel for schedule(dynamic, 64) if (nk >= 4096)
     for (Index r = 0; r < nk; ++r)

@@ -53,14 +53,20 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 ///   node that is no pivot, weighted positively by no other such row (the largest weight wins,
 ///   then the smallest index); else dropped (always for Dirac refinement).
 ///
-/// Row r = (i, d) of C^† is the smallest change of the injection e_p that makes it a left
-/// inverse: c_r = argmin |c - e_p| subject to C c = e_r, with c supported on S_r, the present
-/// DOFs d of the fine nodes within the fewest rings of p in the finer level's mesh graph (nodes
-/// sharing an element) for which that has an exact solution (up to 8 rings). The constraints
-/// involve only the rows of C touching S_r, so each row is a small dense least-norm problem
-/// (complete orthogonal decomposition). On nested meshes e_p already satisfies it (0 rings): C^†
-/// is the injection. The rings keep the rows' support independent of how much finer the finer
-/// level is (a coarse node's whole star holds about 2^d times the ratio of node counts).
+/// Row r = (i, d) of C^† solves C c = e_r (component d) on few fine nodes, so that the wavelets,
+/// which hold the rows of C^† of the coarse nodes whose hat functions reach them, stay small:
+/// - on a cell: the fine nodes whose columns of C (kept rows) have one support Σ ∋ i (the
+///   vertices of a coarse element, face or edge they lie in), |Σ| of them (the best
+///   conditioned by column-pivoted QR of C[Σ, nodes], reciprocal condition >= 1e-3) with
+///   C[Σ, nodes] c = e_i; every other row of C vanishes on them. The smallest such Σ, then the
+///   best conditioned. A fine node at coarse node i gives Σ = {i}: on nested meshes C^† is the
+///   injection. Between levels of very different sizes (each coarse element holding d + 1 fine
+///   nodes or more) every row is of this kind, with at most d + 1 entries;
+/// - else the smallest change of the injection e_p that makes it a left inverse:
+///   c_r = argmin |c - e_p| subject to C c = e_r, with c supported on S_r, the present DOFs d of
+///   the fine nodes within the fewest rings of p in the finer level's mesh graph (nodes sharing
+///   an element) for which that has an exact solution (up to 8 rings), a small dense least-norm
+///   problem (complete orthogonal decomposition) on the rows of C touching S_r.
 ///
 /// The kernel is W = S_N (I - C^T C^†), S_N selecting the present fine DOFs outside a set P of one
 /// kernel pivot per kept row (ascending): C W^T = C - C C^{†,T} C = 0, and W has full row rank
