@@ -60,8 +60,8 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 ///   conditioned by column-pivoted QR of C[Σ, nodes], reciprocal condition >= 1e-3) with
 ///   C[Σ, nodes] c = e_i; every other row of C vanishes on them. The smallest such Σ, then the
 ///   best conditioned. A fine node at coarse node i gives Σ = {i}: on nested meshes C^† is the
-///   injection. Between levels of very different sizes (each coarse element holding d + 1 fine
-///   nodes or more) every row is of this kind, with at most d + 1 entries;
+///   injection. Between levels of very different sizes (coarse elements holding d + 1 fine
+///   nodes or more) most rows are of this kind, with at most d + 1 entries;
 /// - else the smallest change of the injection e_p that makes it a left inverse:
 ///   c_r = argmin |c - e_p| subject to C c = e_r, with c supported on S_r, the present DOFs d of
 ///   the fine nodes within the fewest rings of p in the finer level's mesh graph (nodes sharing
