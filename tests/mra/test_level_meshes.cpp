@@ -56,8 +56,6 @@ IndexVector free_dofs(const test::GridProblem& p) {
     return Eigen::Map<IndexVector>(out.data(), static_cast<Index>(out.size()));
 }
 
-double max_abs(const Matrix& M) { return M.size() ? M.cwiseAbs().maxCoeff() : 0.0; }
-
 using LevelParam = std::tuple<int, Refinement>;
 
 class LevelMeshes : public ::testing::TestWithParam<LevelParam> {
@@ -92,8 +90,8 @@ TEST_P(LevelMeshes, LeftInverseAndKernelHoldToRoundOff) {
             // O(1) entries (checked to 1e-12 inside); C W^T = C - C C^{†,T} C adds one product:
             // 1e-12.
             const Matrix CCd = Matrix(ops.C * SparseMatrix(ops.C_dagger.transpose()));
-            EXPECT_LT(max_abs(CCd - Matrix::Identity(CCd.rows(), CCd.cols())), 1e-12);
-            EXPECT_LT(max_abs(Matrix(ops.C * SparseMatrix(ops.W.transpose()))), 1e-12);
+            EXPECT_LT(test::max_abs(CCd - Matrix::Identity(CCd.rows(), CCd.cols())), 1e-12);
+            EXPECT_LT(test::max_abs(Matrix(ops.C * SparseMatrix(ops.W.transpose()))), 1e-12);
             // The kernel's dimension and full rank (dense rank-revealing QR of W^T).
             EXPECT_EQ(ops.W.rows(), ops.C.cols() - ops.C.rows());
             const Eigen::ColPivHouseholderQR<Matrix> qr{Matrix(ops.W.transpose())};
@@ -104,18 +102,9 @@ TEST_P(LevelMeshes, LeftInverseAndKernelHoldToRoundOff) {
         }
 }
 
-/// Global solves without truncation or correction, with the conditions eliminated or the
-/// boundary rows kept (constrain).
-std::vector<Options> exact_level_options(Refinement r) {
-    Options eliminate = test::exact_options(3, r), constrain = eliminate;
-    eliminate.dirichlet = DirichletTreatment::Eliminate;
-    constrain.dirichlet = DirichletTreatment::Constrain;
-    return {eliminate, constrain};
-}
-
 TEST_P(LevelMeshes, AdaptedRefinementSatisfiesEq9AndEq12) {
     const test::GridProblem p = problem();
-    for (const Options& o : exact_level_options(refinement())) {
+    for (const Options& o : test::exact_level_options(refinement())) {
         const Hierarchy h = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
         const SparseMatrix* A = &h.A_fine;
         SparseMatrix A_level;
@@ -124,7 +113,7 @@ TEST_P(LevelMeshes, AdaptedRefinementSatisfiesEq9AndEq12) {
             const SparseMatrix Ct = L.C_adapted.sparse();
             // Eq. 9: C̃ C^T = I, as on grids: the round-off of Z W C^T: 1e-12.
             const Matrix CtCt = Matrix(Ct * SparseMatrix(L.C.transpose()));
-            EXPECT_LT(max_abs(CtCt - Matrix::Identity(CtCt.rows(), CtCt.cols())), 1e-12) << k;
+            EXPECT_LT(test::max_abs(CtCt - Matrix::Identity(CtCt.rows(), CtCt.cols())), 1e-12) << k;
             // Eq. 12: C̃ A W^T = 0 relative to |C̃| |A| |W|: a CHOLMOD solve's round-off: 1e-10.
             const Matrix CAWt = Matrix(Ct * (*A) * SparseMatrix(L.W.transpose()));
             EXPECT_LT(CAWt.norm(), 1e-10 * Ct.norm() * A->norm() * L.W.norm()) << k;
@@ -136,7 +125,7 @@ TEST_P(LevelMeshes, AdaptedRefinementSatisfiesEq9AndEq12) {
 
 TEST_P(LevelMeshes, MultilevelSolveReproducesFineSolve) {
     const test::GridProblem p = problem();
-    for (const Options& o : exact_level_options(refinement())) {
+    for (const Options& o : test::exact_level_options(refinement())) {
         const Hierarchy h = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
         MultilevelSolver solver(h);
         // Exact block-diagonalization (Eq. 4): q + 1 sparse Cholesky solves' round-off: 1e-9.
@@ -176,7 +165,7 @@ TEST_P(LevelMeshes, InvarianceCorrectionReproducesRigidMotions) {
         const Level& L = h.level(k);
         const Matrix coarse = L.C * rig;
         const Matrix back = L.C_adapted.sparse().transpose() * coarse;
-        EXPECT_LT(max_abs(back - rig), 1e-10 * max_abs(rig)) << "level " << k;
+        EXPECT_LT(test::max_abs(back - rig), 1e-10 * test::max_abs(rig)) << "level " << k;
         rig = coarse;
     }
 }
@@ -207,9 +196,9 @@ TEST(LevelMeshOperators, EqualTheGridOperatorsOnNestedGrids) {
                 local_refinement_operators(C_node, coincident, p.mesh.elements, dim, dofs, false);
             EXPECT_EQ(local.coarse_dofs, grid.coarse_dofs);
             EXPECT_EQ(local.dropped_dofs, grid.dropped_dofs);
-            EXPECT_EQ(max_abs(Matrix(local.C - grid.C)), 0.0);
-            EXPECT_EQ(max_abs(Matrix(local.C_dagger - grid.C_dagger)), 0.0);
-            EXPECT_EQ(max_abs(Matrix(local.W - grid.W)), 0.0);
+            EXPECT_EQ(test::max_abs(Matrix(local.C - grid.C)), 0.0);
+            EXPECT_EQ(test::max_abs(Matrix(local.C_dagger - grid.C_dagger)), 0.0);
+            EXPECT_EQ(test::max_abs(Matrix(local.W - grid.W)), 0.0);
         }
     }
 }
