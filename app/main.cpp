@@ -191,10 +191,11 @@ int main(int argc, char** argv) {
             const double read = since_start();
             cg::app::run_solve(sc, out_dir, read);
         } else if (*coarsen) {
-            const cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
+            cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
             const double read = since_start();
-            failed = cg::app::run_coarsen(sc, selected_methods(sc, method), coarsen_out, "coarsen",
-                                          read, {coarsen_export == "inp"});
+            const std::vector<std::string> methods = selected_methods(sc, method);
+            failed = cg::app::run_coarsen(std::move(sc), methods, coarsen_out, "coarsen", read,
+                                          {coarsen_export == "inp"});
         } else if (*simulate) {
             const cg::scene::Scene sc = cg::scene::load_scene(sim_scene);
             const double read = since_start();
