@@ -16,6 +16,11 @@ namespace {
 /// as PointLocator's.
 constexpr double kInside = 1e-10;
 
+/// Corner support below the finest automatic level. The grids are nested, so a node of level
+/// k+1 < q is a corner (support 1) or an edge midpoint (1/2) of level k's elements; more than
+/// 1/2 keeps the elements whose corners are all nodes of level k+1.
+constexpr double kNestedSupport = 0.75;
+
 /// The fine mesh's mean node spacing h = (V / N)^{1/d}.
 double mean_spacing(const mesh::Mesh& fine) {
     double measure = 0;
@@ -66,12 +71,12 @@ Matrix corner_support(const mesh::Mesh& grid, const Matrix& points) {
     return support;
 }
 
-/// The elements of `grid` whose every corner has a support of at least kMinCornerSupport, with
-/// the nodes they use (renumbered in their order), material ids 0 and no GridInfo.
-mesh::Mesh carve(const mesh::Mesh& grid, const Matrix& support) {
+/// The elements of `grid` whose every corner has a support of at least `min_support`, with the
+/// nodes they use (renumbered in their order), material ids 0 and no GridInfo.
+mesh::Mesh carve(const mesh::Mesh& grid, const Matrix& support, double min_support) {
     std::vector<Index> kept;
     for (Index e = 0; e < grid.num_elements(); ++e)
-        if (support.row(e).minCoeff() >= kMinCornerSupport) kept.push_back(e);
+        if (support.row(e).minCoeff() >= min_support) kept.push_back(e);
     std::vector<Index> number(static_cast<std::size_t>(grid.num_nodes()), -1);
     Index nodes = 0;
     for (const Index e : kept)
@@ -98,8 +103,9 @@ void verify_simplicial(const mesh::Mesh& fine) {
 }
 
 void verify_levels(const mesh::Mesh& fine, int levels) {
+    CG_VERIFY(levels >= 2, "mra: automatic level meshes need levels >= 2, got {}", levels);
     const int most = max_automatic_levels(fine);
-    CG_VERIFY(levels >= 2 && levels <= most,
+    CG_VERIFY(levels <= most,
               "mra: {} levels are too many for automatic level meshes on a fine mesh of {} "
               "nodes (the coarsest level would have about {:.3g} nodes, fewer than {}): use at "
               "most {} levels or give the level meshes",
@@ -141,7 +147,8 @@ std::vector<mesh::Mesh> automatic_level_meshes(const mesh::Mesh& fine, int level
     for (int k = levels - 1; k >= 1; --k) {
         const mesh::Mesh grid = mesh::make_grid(fine.type, box.row(0).transpose(),
                                                 box.row(1).transpose(), cells * (1 << (k - 1)));
-        mesh::Mesh level = carve(grid, corner_support(grid, *finer));
+        const double min_support = k == levels - 1 ? kMinCornerSupport : kNestedSupport;
+        mesh::Mesh level = carve(grid, corner_support(grid, *finer), min_support);
         CG_VERIFY(level.num_nodes() > fine.dim() && level.num_nodes() < finer->rows(),
                   "mra: automatic level {} of {} has {} nodes for the {} of the next finer "
                   "level: use fewer levels or give the level meshes",

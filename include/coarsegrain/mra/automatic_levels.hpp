@@ -10,8 +10,8 @@
 
 namespace coarsegrain::mra {
 
-/// Smallest barycentric coordinate each corner of a kept element of an automatic level must
-/// reach at one of the finer level's nodes the element contains (automatic_level_meshes).
+/// Smallest barycentric coordinate each corner of a kept element of the finest automatic level
+/// must reach at one of the fine mesh's nodes the element contains (automatic_level_meshes).
 inline constexpr double kMinCornerSupport = 0.05;
 
 /// The meshes of levels 1..q-1 (q = levels; the fine mesh is level q) for build_hierarchy on
@@ -21,25 +21,28 @@ inline constexpr double kMinCornerSupport = 0.05;
 /// node spacing, and level k gets a spacing of about h_k = 2^{q-k} h, so that it has about
 /// N / 2^{d(q-k)} nodes. Level k is the grid of mesh::make_grid (the fine mesh's element type:
 /// 2 triangles or 6 Kuhn tetrahedra per cell) over the fine mesh's bounding box with
-/// c 2^{k-1} cells along each axis, c = max(1, round(extent / h_1)), carved: it keeps the
-/// elements that contain a node of level k+1 (the fine mesh for k = q-1; barycentric
-/// coordinates >= -1e-10) and whose every corner has a barycentric coordinate of at least
-/// kMinCornerSupport at one of the level k+1 nodes they contain, and drops the nodes of no kept
-/// element. The levels are built from the finest down. The grids are nested (each has half the
-/// cells of the next), so a node of level k+1 < q is a corner (coordinate 1) or an edge midpoint
-/// (1/2) of level k's elements: below q-1 the levels are nested but along the boundary, where a
-/// kept corner may be only the end of finer edges (the hierarchy's left inverse is the injection
-/// at the other nodes).
+/// c 2^{k-1} cells along each axis, c = max(1, round(extent / h_1)), carved:
+/// - level q-1 keeps the elements that contain a node of the fine mesh (barycentric
+///   coordinates >= -1e-10) and whose every corner has a barycentric coordinate of at least
+///   kMinCornerSupport at one of the fine nodes they contain;
+/// - a level k < q-1 keeps the elements whose corners are all nodes of level k+1. The grids are
+///   nested (each has half the cells of the next), so these levels are nested: the hierarchy's
+///   left inverse between them is the injection, whatever the Dirichlet conditions. (Keeping
+///   corners that are only ends of finer edges, at support 1/2, covers the finer level closer
+///   but made two such corners of one edge share their only finer node, and the cheese wheel's
+///   4-level hierarchy had no local left inverse.)
+/// Nodes of no kept element are dropped. The levels are built from the finest down.
 ///
 /// The grids span the bounding box exactly, so that its faces, where Dirichlet conditions
 /// usually sit, are grid planes at every level: coarse nodes on a clamped face then pivot on
 /// fixed fine nodes and are dropped by the hierarchy, instead of keeping a few weights at free
 /// fine nodes next to the face (a centred, stretched box put the clamped face mid-cell, and those
 /// rows had no local left inverse). The corner rule makes every node's P1 hat function at least
-/// kMinCornerSupport at a finer node, so that no row of the refinement C^k vanishes or nearly
-/// does; it drops the elements the finer level touches only along a face, an edge or a corner,
-/// or only in a sliver along a face. The finer nodes in them lie outside the level mesh by less
-/// than a cell (tests/mra/test_automatic_levels.cpp), where linear_refinement extrapolates.
+/// kMinCornerSupport at a fine node, so that no row of the refinement C^{q-1} vanishes or nearly
+/// does; it drops the elements the fine mesh touches only along a face, an edge or a corner, or
+/// only in a sliver along a face. The finer nodes the kept elements miss lie outside them by
+/// less than a cell's diagonal (tests/mra/test_automatic_levels.cpp), where linear_refinement
+/// extrapolates.
 ///
 /// @param[in] fine    the fine mesh, triangles (Tri3) or tetrahedra (Tet4), level q
 /// @param[in] levels  q >= 2
