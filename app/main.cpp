@@ -109,7 +109,9 @@ int main(int argc, char** argv) {
         "also coarse_model.vtu (the coarse mesh with its tensors: a scene mesh that `coarsegrain\n"
         "solve` simulates without the fine mesh) and, for effective-tensor, harmonic.vtu;\n"
         "with --export inp, coarse_model.inp (a CalculiX / Abaqus deck of that model; the\n"
-        "hierarchy: coarse_K.mtx, coarse_M.mtx, coarse_f.mtx and to_fine.mtx).\n"
+        "hierarchy: coarse_K.mtx, coarse_M.mtx, coarse_f.mtx and to_fine.mtx). The mra methods\n"
+        "on a triangle or tet mesh without coarse.level_meshes make its coarser levels and write\n"
+        "them as level_<k>.vtu.\n"
         "Several methods compare them: DIR/<method>/ holds each one's files, and DIR/report.md\n"
         "the table and pictures (as `coarsegrain demo`).\n"
         "See docs/guide.md, \"Coarsening\".");
