@@ -146,9 +146,18 @@ bool uses_automatic_levels(const scene::Scene& scene, const std::string& method)
 }
 
 scene::Scene with_automatic_levels(scene::Scene scene, const std::vector<std::string>& methods) {
-    if (std::none_of(methods.begin(), methods.end(),
-                     [&](const std::string& m) { return uses_automatic_levels(scene, m); }))
-        return scene;
+    // A method that cannot run on the scene fails on its own, later (check_methods lets the
+    // others of a comparison run).
+    const auto needs_levels = [&](const std::string& method) {
+        if (!uses_automatic_levels(scene, method)) return false;
+        try {
+            validate_method(scene, method);
+            return true;
+        } catch (const Error&) {
+            return false;
+        }
+    };
+    if (std::none_of(methods.begin(), methods.end(), needs_levels)) return scene;
     Timings timings;
     {
         const Phase phase("automatic levels", &timings);

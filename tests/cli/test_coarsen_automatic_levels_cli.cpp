@@ -153,4 +153,28 @@ TEST(CliCoarsenAutomaticLevels, BadInputFailsBeforeAnyWork) {
     EXPECT_THAT(r.output, HasSubstr("got quad elements"));
 }
 
+// In a comparison, levels the mesh cannot hold fail the hierarchy methods only: the effective
+// tensors on coarse.mesh still run.
+TEST(CliCoarsenAutomaticLevels, TooManyLevelsFailOnlyTheHierarchyInAComparison) {
+    const std::string dir = temp_dir("cli_automatic_levels_all");
+    const json scene = holed_plate_scene(
+        dir, {{"mesh", {{"file", write_coarse_plate(dir, "coarse.msh", 8)}}}, {"levels", 6}});
+    const Result r =
+        cli("coarsen " + write_scene(dir, scene) + " --method all --out " + dir + "/out");
+    EXPECT_NE(r.code, 0);
+    const json s = read_json(dir + "/out/summary.json");
+    int failed = 0;
+    for (const json& m : s["methods"]) {
+        const std::string method = m["method"];
+        if (method.starts_with("mra")) {
+            EXPECT_THAT(m["error"].get<std::string>(), HasSubstr("coarse.levels")) << method;
+            ++failed;
+        } else {
+            EXPECT_FALSE(m.contains("error")) << method;
+        }
+    }
+    EXPECT_EQ(failed, 2);
+    EXPECT_EQ(s["failed_methods"], 2);
+}
+
 }  // namespace

@@ -95,9 +95,10 @@ void validate_method(const scene::Scene& scene, const std::string& method);
 bool uses_automatic_levels(const scene::Scene& scene, const std::string& method);
 
 /// The scene with coarse.level_meshes made by mra::automatic_level_meshes and
-/// coarse.automatic_levels_seconds set if one of `methods` uses them (uses_automatic_levels), so
-/// that all hierarchy methods of a run share one set; otherwise the scene unchanged. Phase
-/// "automatic levels". Call it after validate_method, before the fine solve.
+/// coarse.automatic_levels_seconds set if one of `methods` that can run on the scene
+/// (validate_method) uses them (uses_automatic_levels), so that all hierarchy methods of a run
+/// share one set; otherwise the scene unchanged. Phase "automatic levels". Call it before the
+/// fine solve.
 /// @throws InvalidScene naming coarse.levels if a level cannot be made
 scene::Scene with_automatic_levels(scene::Scene scene, const std::vector<std::string>& methods);
 
