@@ -109,7 +109,9 @@ int main(int argc, char** argv) {
         "also coarse_model.vtu (the coarse mesh with its tensors: a scene mesh that `coarsegrain\n"
         "solve` simulates without the fine mesh) and, for effective-tensor, harmonic.vtu;\n"
         "with --export inp, coarse_model.inp (a CalculiX / Abaqus deck of that model; the\n"
-        "hierarchy: coarse_K.mtx, coarse_M.mtx, coarse_f.mtx and to_fine.mtx).\n"
+        "hierarchy: coarse_K.mtx, coarse_M.mtx, coarse_f.mtx and to_fine.mtx). The mra methods\n"
+        "on a triangle or tet mesh without coarse.level_meshes make its coarser levels and write\n"
+        "them as level_<k>.vtu.\n"
         "Several methods compare them: DIR/<method>/ holds each one's files, and DIR/report.md\n"
         "the table and pictures (as `coarsegrain demo`).\n"
         "See docs/guide.md, \"Coarsening\".");
@@ -191,10 +193,11 @@ int main(int argc, char** argv) {
             const double read = since_start();
             cg::app::run_solve(sc, out_dir, read);
         } else if (*coarsen) {
-            const cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
+            cg::scene::Scene sc = cg::scene::load_scene(coarsen_scene);
             const double read = since_start();
-            failed = cg::app::run_coarsen(sc, selected_methods(sc, method), coarsen_out, "coarsen",
-                                          read, {coarsen_export == "inp"});
+            const std::vector<std::string> methods = selected_methods(sc, method);
+            failed = cg::app::run_coarsen(std::move(sc), methods, coarsen_out, "coarsen", read,
+                                          {coarsen_export == "inp"});
         } else if (*simulate) {
             const cg::scene::Scene sc = cg::scene::load_scene(sim_scene);
             const double read = since_start();

@@ -71,6 +71,7 @@ nlohmann::json level_build_json(const mra::LevelReport& L) {
                         {"A_density", L.A_density},
                         {"B_nnz", L.B_nnz},
                         {"B_density", L.B_density}};
+    if (!L.mesh_file.empty()) j["mesh"] = L.mesh_file;
     if (L.region_rings_mean) j["region_rings_mean"] = *L.region_rings_mean;
     if (L.region_rings_max) j["region_rings_max"] = *L.region_rings_max;
     return j;

@@ -351,17 +351,16 @@ int run_comparison(const scene::Scene& sc, const std::vector<std::string>& metho
 
 }  // namespace
 
-int run_coarsen(const scene::Scene& sc, const std::vector<std::string>& methods,
+int run_coarsen(scene::Scene scene, const std::vector<std::string>& methods,
                 const std::string& out_dir, const std::string& command, double read_seconds,
                 const Exports& exports) {
+    check_methods(scene, methods);
+    const scene::Scene sc = coarsen::with_automatic_levels(std::move(scene), methods);
+    const OutputFolder folder(out_dir);
     if (methods.size() == 1) {
-        coarsen::validate_method(sc, methods.front());
-        const OutputFolder folder(out_dir);
         run_one(sc, methods.front(), out_dir, read_seconds, exports);
         return 0;
     }
-    check_methods(sc, methods);
-    const OutputFolder folder(out_dir);
     return run_comparison(sc, methods, out_dir, command, read_seconds, exports);
 }
 

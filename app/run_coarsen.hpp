@@ -20,11 +20,13 @@ namespace coarsegrain::app {
 /// reported (stderr, the table, report.md, and its row of "methods" with "error": the reason)
 /// and the others still run; summary.json "failed_methods" counts them.
 /// With exports.calculix each method's folder also gets coarse_model.inp (Exports).
+/// Automatic level meshes (coarsen::with_automatic_levels) are made once, before the fine
+/// solve, and each mra method writes them to its folder as level_<k>.vtu.
 /// @param[in] command       "coarsen" or "demo" (summary.json "command")
 /// @param[in] read_seconds  time already spent reading the scene (reported as "read")
 /// @return the number of methods that failed (0 with one method: its failure throws)
 /// @throws Error before any work if the only method, or every method, cannot run on the scene
-int run_coarsen(const scene::Scene& scene, const std::vector<std::string>& methods,
+int run_coarsen(scene::Scene scene, const std::vector<std::string>& methods,
                 const std::string& out_dir, const std::string& command, double read_seconds,
                 const Exports& exports = {});
 

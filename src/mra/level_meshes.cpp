@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <string>
 #include <utility>
 
 #include "coarsegrain/common/error.hpp"
@@ -441,9 +442,23 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
     const NodeGraph graph(fine_elements, C_node.cols());
     const LeftInverseRow left_inverse(C_node, rows, graph, fine_local, coarse_local, dim);
     std::vector<std::vector<std::pair<Index, double>>> dagger(static_cast<std::size_t>(nk));
+    // An exception must not leave the parallel loop: the error of the first row that has one is
+    // raised after it.
+    Index failed = nk;
+    std::string failure;
 #pragma omp parallel for schedule(dynamic, 64) if (nk >= 4096)
-    for (Index r = 0; r < nk; ++r)
-        dagger[r] = left_inverse(kept[r] / dim, kept[r] % dim, fine_dofs[pivot[r]] / dim);
+    for (Index r = 0; r < nk; ++r) {
+        try {
+            dagger[r] = left_inverse(kept[r] / dim, kept[r] % dim, fine_dofs[pivot[r]] / dim);
+        } catch (const Error& e) {
+#pragma omp critical(local_refinement_failure)
+            if (r < failed) {
+                failed = r;
+                failure = e.what();
+            }
+        }
+    }
+    CG_VERIFY(failed == nk, "{}", failure);
     t.clear();
     for (Index r = 0; r < nk; ++r)
         for (const auto& [l, v] : dagger[r]) t.emplace_back(r, l, v);

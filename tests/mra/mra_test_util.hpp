@@ -140,4 +140,16 @@ inline mra::Options exact_options(int levels, mra::Refinement r) {
     return o;
 }
 
+/// Largest absolute entry of M (0 if empty).
+inline double max_abs(const Matrix& M) { return M.size() ? M.cwiseAbs().maxCoeff() : 0.0; }
+
+/// exact_options with three levels and the conditions eliminated or the boundary rows kept
+/// (constrain): the treatments of the hierarchy on level meshes' exactness tests.
+inline std::vector<mra::Options> exact_level_options(mra::Refinement r) {
+    mra::Options eliminate = exact_options(3, r), constrain = eliminate;
+    eliminate.dirichlet = mra::DirichletTreatment::Eliminate;
+    constrain.dirichlet = mra::DirichletTreatment::Constrain;
+    return {eliminate, constrain};
+}
+
 }  // namespace coarsegrain::test

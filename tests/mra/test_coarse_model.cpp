@@ -238,10 +238,9 @@ TEST(MraCoarseModel, UnsupportedInputIsReported) {
                        "test.json: dirichlet[0].value: the mra-dirac method supports only zero "
                        "prescribed displacements, got [0, 0.1]");
     j = scene_json();
-    j["mesh"]["grid"]["element"] = "tri";
     const scene::Scene s2 = scene::parse_scene(j, "test.json", "");
     scene::Scene s3 = s2;
-    s3.mesh.grid.reset();
+    s3.mesh.grid.reset();  // a quad mesh that is no grid: no automatic level meshes
     test::expect_error([&] { coarsen::validate_method(s3, "mra"); }, "needs a regular grid");
 }
 

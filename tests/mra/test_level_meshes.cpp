@@ -56,8 +56,6 @@ IndexVector free_dofs(const test::GridProblem& p) {
     return Eigen::Map<IndexVector>(out.data(), static_cast<Index>(out.size()));
 }
 
-double max_abs(const Matrix& M) { return M.size() ? M.cwiseAbs().maxCoeff() : 0.0; }
-
 using LevelParam = std::tuple<int, Refinement>;
 
 class LevelMeshes : public ::testing::TestWithParam<LevelParam> {
@@ -92,30 +90,22 @@ TEST_P(LevelMeshes, LeftInverseAndKernelHoldToRoundOff) {
             // O(1) entries (checked to 1e-12 inside); C W^T = C - C C^{†,T} C adds one product:
             // 1e-12.
             const Matrix CCd = Matrix(ops.C * SparseMatrix(ops.C_dagger.transpose()));
-            EXPECT_LT(max_abs(CCd - Matrix::Identity(CCd.rows(), CCd.cols())), 1e-12);
-            EXPECT_LT(max_abs(Matrix(ops.C * SparseMatrix(ops.W.transpose()))), 1e-12);
+            EXPECT_LT(test::max_abs(CCd - Matrix::Identity(CCd.rows(), CCd.cols())), 1e-12);
+            EXPECT_LT(test::max_abs(Matrix(ops.C * SparseMatrix(ops.W.transpose()))), 1e-12);
             // The kernel's dimension and full rank (dense rank-revealing QR of W^T).
             EXPECT_EQ(ops.W.rows(), ops.C.cols() - ops.C.rows());
             const Eigen::ColPivHouseholderQR<Matrix> qr{Matrix(ops.W.transpose())};
             EXPECT_EQ(qr.rank(), ops.W.rows());
             // Fine nodes coincide with no middle-level node: the linear C^† is not the injection.
-            if (refinement() == Refinement::Linear)
+            if (refinement() == Refinement::Linear) {
                 EXPECT_GT(ops.C_dagger.nonZeros(), ops.C.rows());
+            }
         }
-}
-
-/// Global solves without truncation or correction, with the conditions eliminated or the
-/// boundary rows kept (constrain).
-std::vector<Options> exact_level_options(Refinement r) {
-    Options eliminate = test::exact_options(3, r), constrain = eliminate;
-    eliminate.dirichlet = DirichletTreatment::Eliminate;
-    constrain.dirichlet = DirichletTreatment::Constrain;
-    return {eliminate, constrain};
 }
 
 TEST_P(LevelMeshes, AdaptedRefinementSatisfiesEq9AndEq12) {
     const test::GridProblem p = problem();
-    for (const Options& o : exact_level_options(refinement())) {
+    for (const Options& o : test::exact_level_options(refinement())) {
         const Hierarchy h = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
         const SparseMatrix* A = &h.A_fine;
         SparseMatrix A_level;
@@ -124,7 +114,7 @@ TEST_P(LevelMeshes, AdaptedRefinementSatisfiesEq9AndEq12) {
             const SparseMatrix Ct = L.C_adapted.sparse();
             // Eq. 9: C̃ C^T = I, as on grids: the round-off of Z W C^T: 1e-12.
             const Matrix CtCt = Matrix(Ct * SparseMatrix(L.C.transpose()));
-            EXPECT_LT(max_abs(CtCt - Matrix::Identity(CtCt.rows(), CtCt.cols())), 1e-12) << k;
+            EXPECT_LT(test::max_abs(CtCt - Matrix::Identity(CtCt.rows(), CtCt.cols())), 1e-12) << k;
             // Eq. 12: C̃ A W^T = 0 relative to |C̃| |A| |W|: a CHOLMOD solve's round-off: 1e-10.
             const Matrix CAWt = Matrix(Ct * (*A) * SparseMatrix(L.W.transpose()));
             EXPECT_LT(CAWt.norm(), 1e-10 * Ct.norm() * A->norm() * L.W.norm()) << k;
@@ -136,7 +126,7 @@ TEST_P(LevelMeshes, AdaptedRefinementSatisfiesEq9AndEq12) {
 
 TEST_P(LevelMeshes, MultilevelSolveReproducesFineSolve) {
     const test::GridProblem p = problem();
-    for (const Options& o : exact_level_options(refinement())) {
+    for (const Options& o : test::exact_level_options(refinement())) {
         const Hierarchy h = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
         MultilevelSolver solver(h);
         // Exact block-diagonalization (Eq. 4): q + 1 sparse Cholesky solves' round-off: 1e-9.
@@ -178,7 +168,7 @@ TEST_P(LevelMeshes, InvarianceCorrectionReproducesRigidMotions) {
                     }
                 }
             }
-            const double scale = max_abs(rig);
+            const double scale = test::max_abs(rig);
             for (int k = h.num_levels() - 1; k >= 1; --k) {
                 const Level& L = h.level(k);
                 const IndexVector& finer_dofs =
@@ -189,13 +179,15 @@ TEST_P(LevelMeshes, InvarianceCorrectionReproducesRigidMotions) {
                 for (Index a = 0; a < error.rows(); ++a)
                     if (L.invariance_applied[finer_dofs[a] / dim()]) {
                         ++corrected;
-                        EXPECT_LT(max_abs(error.row(a)), 1e-10 * scale)
+                        EXPECT_LT(test::max_abs(error.row(a)), 1e-10 * scale)
                             << dirichlet_name(t) << " radius " << radius << " level " << k;
                     }
-                if (t == DirichletTreatment::Ignore)
+                // (The coarsest step's supports all reach a Dirichlet node.)
+                if (t == DirichletTreatment::Ignore) {
                     EXPECT_EQ(corrected, error.rows()) << "radius " << radius << " level " << k;
-                else if (radius < inf && k + 1 == h.num_levels())  // (the coarsest step's
-                    EXPECT_GT(corrected, 0);  // supports all reach a Dirichlet node)
+                } else if (radius < inf && k + 1 == h.num_levels()) {
+                    EXPECT_GT(corrected, 0);
+                }
                 rig = coarse;
             }
         }
@@ -228,7 +220,7 @@ TEST_P(LevelMeshes, LocalizedSolvesOverTheWholeLevelAreTheGlobalSolves) {
     // region's solve is the global solve restricted to its rows' columns, so C̃ is the global
     // one up to the round-off of two sparse Cholesky solves (1e-10 relative).
     const test::GridProblem p = problem();
-    for (Options o : exact_level_options(refinement())) {
+    for (Options o : test::exact_level_options(refinement())) {
         const Hierarchy global = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
         o.radius = {40};
         const Hierarchy local = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
@@ -249,7 +241,7 @@ TEST_P(LevelMeshes, LocalizedRowsAreAOrthogonalToTheWaveletsOfTheirRegion) {
     // Cholesky solve's round-off (1e-10 relative to |C̃_r| |A| |W|), and not beyond.
     const test::GridProblem p = problem();
     const std::vector<mesh::Mesh> levels = non_nested_levels(dim());
-    for (Options o : exact_level_options(refinement())) {
+    for (Options o : test::exact_level_options(refinement())) {
         o.radius = {1};
         const Hierarchy h = build_hierarchy(coarser_levels(dim()), p.mesh, p.K, p.bc.dofs, o);
         const int k = h.num_levels() - 1;  // the fine step
@@ -308,9 +300,9 @@ TEST(LevelMeshOperators, EqualTheGridOperatorsOnNestedGrids) {
                 local_refinement_operators(C_node, coincident, p.mesh.elements, dim, dofs, false);
             EXPECT_EQ(local.coarse_dofs, grid.coarse_dofs);
             EXPECT_EQ(local.dropped_dofs, grid.dropped_dofs);
-            EXPECT_EQ(max_abs(Matrix(local.C - grid.C)), 0.0);
-            EXPECT_EQ(max_abs(Matrix(local.C_dagger - grid.C_dagger)), 0.0);
-            EXPECT_EQ(max_abs(Matrix(local.W - grid.W)), 0.0);
+            EXPECT_EQ(test::max_abs(Matrix(local.C - grid.C)), 0.0);
+            EXPECT_EQ(test::max_abs(Matrix(local.C_dagger - grid.C_dagger)), 0.0);
+            EXPECT_EQ(test::max_abs(Matrix(local.W - grid.W)), 0.0);
         }
     }
 }
@@ -337,7 +329,9 @@ TEST(LevelMeshOperators, SubdivisionIsNestedAndConservesMeasure) {
         for (Index j = 0; j < C.outerSize(); ++j)
             for (SparseMatrix::InnerIterator it(C, j); it; ++it) {
                 const double expected = j < coarse.num_nodes() ? 1.0 : 0.5;
-                if (std::abs(it.value()) > 1e-14) EXPECT_NEAR(it.value(), expected, 1e-14);
+                if (std::abs(it.value()) > 1e-14) {
+                    EXPECT_NEAR(it.value(), expected, 1e-14);
+                }
             }
         IndexVector all(fine.num_dofs());
         for (Index d = 0; d < all.size(); ++d) all[d] = d;

@@ -81,11 +81,26 @@ const std::vector<std::string>& method_names();
 std::vector<std::string> configured_methods(const scene::Scene& scene);
 
 /// Checks, before any assembly, that `method` can run on the scene: a coarse.mesh for the
-/// effective tensors and the baselines; for the mra methods a regular grid whose cells per axis
-/// are divisible by 2^(levels - 1) and zero prescribed displacements. (Every option's value
+/// effective tensors and the baselines; for the mra methods zero prescribed displacements and a
+/// regular grid whose cells per axis are divisible by 2^(levels - 1), or level meshes
+/// (mra::validate_level_meshes), or a simplicial fine mesh for automatic level meshes
+/// (mra::validate_automatic_levels: not too many levels for its nodes). (Every option's value
 /// was validated when the scene was loaded.)
 /// @throws Error for an unknown method, InvalidScene naming the key otherwise
 void validate_method(const scene::Scene& scene, const std::string& method);
+
+/// Whether `method` builds its hierarchy on automatic level meshes (mra::automatic_level_meshes
+/// with coarse.levels): an mra method on a simplicial fine mesh that is no grid, without
+/// coarse.level_meshes.
+bool uses_automatic_levels(const scene::Scene& scene, const std::string& method);
+
+/// The scene with coarse.level_meshes made by mra::automatic_level_meshes and
+/// coarse.automatic_levels_seconds set if one of `methods` that can run on the scene
+/// (validate_method) uses them (uses_automatic_levels), so that all hierarchy methods of a run
+/// share one set; otherwise the scene unchanged. Phase "automatic levels". Call it before the
+/// fine solve.
+/// @throws InvalidScene naming coarse.levels if a level cannot be made
+scene::Scene with_automatic_levels(scene::Scene scene, const std::vector<std::string>& methods);
 
 /// Whether a run of `methods` on the scene uses the fine solve's factorization of K_ff (the
 /// fine stiffness without the Dirichlet DOFs), so that scene::solve_static should keep it
@@ -102,6 +117,9 @@ bool uses_fine_factorization(const scene::Scene& scene, const scene::FineModel& 
                              const std::vector<std::string>& methods);
 
 /// Builds the coarse model of `method` (one of method_names()) with the scene's coarse options.
+/// An mra method on automatic level meshes (made here if uses_automatic_levels, i.e. the scene
+/// did not go through with_automatic_levels) adds their seconds as the phase "automatic levels"
+/// and the levels' meshes as outputs level_<k>.vtu (LevelReport::mesh_file), k = 1..q-1.
 /// `fine_factorization` (optional): the fine solve's factorization of K_ff, which the
 /// effective tensors' mixed harmonic solve uses where it is its operator (uses_fine_factorization).
 /// @throws everything validate_method throws; Error from the method's construction

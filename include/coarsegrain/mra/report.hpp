@@ -29,6 +29,8 @@ struct LevelReport {
     /// (global solves, cell localization).
     std::optional<double> region_rings_mean;
     std::optional<int> region_rings_max;
+    /// The file the level's mesh was written to (automatic level meshes), else empty.
+    std::string mesh_file;
 };
 
 /// Figures of the fine level q, which has no refinement and no wavelets.

@@ -49,8 +49,12 @@ struct CoarseOptions {
     /// coarse.normals, coarse.boundary, coarse.map (effective tensors and baselines).
     homogenize::Options homogenize;
     /// coarse.level_meshes, each read like "mesh": the meshes of the hierarchy's levels
-    /// 1..q-1, coarsest first (the fine mesh is level q), simplicial; empty: nested grids.
+    /// 1..q-1, coarsest first (the fine mesh is level q), simplicial; empty: nested grids, or on
+    /// a simplicial fine mesh that is no grid the automatic level meshes.
     std::vector<mesh::Mesh> level_meshes;
+    /// Set when level_meshes were made by coarsen::with_automatic_levels
+    /// (mra::automatic_level_meshes) rather than read from the scene: the seconds that took.
+    std::optional<double> automatic_levels_seconds;
     /// coarse.levels or coarse.level_meshes was given: the scene configures the
     /// material-adapted hierarchy.
     bool hierarchy = false;
