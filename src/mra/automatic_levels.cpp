@@ -73,27 +73,12 @@ Matrix corner_support(const mesh::Mesh& grid, const Matrix& points) {
 }
 
 /// The elements of `grid` whose every corner has a support of at least `min_support`, with the
-/// nodes they use (renumbered in their order), material ids 0 and no GridInfo.
+/// nodes they use (mesh::element_subset).
 mesh::Mesh carve(const mesh::Mesh& grid, const Matrix& support, double min_support) {
     std::vector<Index> kept;
     for (Index e = 0; e < grid.num_elements(); ++e)
         if (support.row(e).minCoeff() >= min_support) kept.push_back(e);
-    std::vector<Index> number(static_cast<std::size_t>(grid.num_nodes()), -1);
-    Index nodes = 0;
-    for (const Index e : kept)
-        for (Index a = 0; a < grid.elements.cols(); ++a)
-            if (number[grid.elements(e, a)] < 0) number[grid.elements(e, a)] = nodes++;
-    mesh::Mesh m;
-    m.type = grid.type;
-    m.rest_positions.resize(nodes, grid.dim());
-    for (Index v = 0; v < grid.num_nodes(); ++v)
-        if (number[v] >= 0) m.rest_positions.row(number[v]) = grid.rest_positions.row(v);
-    m.elements.resize(static_cast<Index>(kept.size()), grid.elements.cols());
-    for (Index r = 0; r < m.num_elements(); ++r)
-        for (Index a = 0; a < grid.elements.cols(); ++a)
-            m.elements(r, a) = number[grid.elements(kept[r], a)];
-    m.material_ids = IndexVector::Zero(m.num_elements());
-    return m;
+    return mesh::element_subset(grid, kept);
 }
 
 void verify_simplicial(const mesh::Mesh& fine) {

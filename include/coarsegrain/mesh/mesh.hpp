@@ -2,6 +2,7 @@
 /// @file The fine (or coarse) mesh: one element type, rest positions, connectivity, material ids.
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "coarsegrain/common/types.hpp"
 
@@ -27,8 +28,8 @@ bool is_simplex(ElementType type);
 /// Description of a regular axis-aligned grid. Set on meshes made by make_grid: all elements
 /// of a quad/hex grid are congruent, so element matrices can be computed once.
 struct GridInfo {
-    Eigen::Vector3d min = Eigen::Vector3d::Zero();  ///< lower corner (z unused in 2D)
-    Eigen::Vector3d max = Eigen::Vector3d::Ones();  ///< upper corner
+    Eigen::Vector3d min = Eigen::Vector3d::Zero();    ///< lower corner (z unused in 2D)
+    Eigen::Vector3d max = Eigen::Vector3d::Ones();    ///< upper corner
     Eigen::Vector3i cells = Eigen::Vector3i::Ones();  ///< cells per axis (z = 1 in 2D)
     /// Cell size along each axis.
     Eigen::Vector3d spacing() const;
@@ -37,9 +38,9 @@ struct GridInfo {
 /// A mesh with a single element type.
 struct Mesh {
     ElementType type = ElementType::Tet4;
-    Matrix rest_positions;       ///< #V by dim rest positions
-    IndexMatrix elements;        ///< #E by nodes_per_element(type), orderings as in ElementType
-    IndexVector material_ids;    ///< #E material id of each element (Gmsh physical tag, grid field)
+    Matrix rest_positions;     ///< #V by dim rest positions
+    IndexMatrix elements;      ///< #E by nodes_per_element(type), orderings as in ElementType
+    IndexVector material_ids;  ///< #E material id of each element (Gmsh physical tag, grid field)
     std::optional<GridInfo> grid;  ///< set when the mesh is a regular grid (see make_grid)
 
     int dim() const { return element_dim(type); }
@@ -62,5 +63,10 @@ double element_measure(const Mesh& mesh, Index e);
 
 /// Axis-aligned bounding box of the mesh, 2 by dim: row 0 min, row 1 max.
 Matrix bounding_box(const Mesh& mesh);
+
+/// The elements `kept` of `mesh` (indices, in that order) with the nodes they use, renumbered in
+/// their original order; material ids 0, no GridInfo.
+/// @throws Error if an index is out of range
+Mesh element_subset(const Mesh& mesh, const std::vector<Index>& kept);
 
 }  // namespace coarsegrain::mesh
