@@ -1,8 +1,9 @@
 #include "coarsegrain/mesh/mesh.hpp"
 
+#include <cmath>
+
 #include <fmt/ranges.h>
 
-#include <cmath>
 #include <limits>
 
 #include "coarsegrain/common/error.hpp"
@@ -15,33 +16,27 @@ int element_dim(ElementType type) {
 
 int nodes_per_element(ElementType type) {
     switch (type) {
-        case ElementType::Tri3:
-            return 3;
-        case ElementType::Quad4:
-            return 4;
-        case ElementType::Tet4:
-            return 4;
-        case ElementType::Hex8:
-            return 8;
+        case ElementType::Tri3: return 3;
+        case ElementType::Quad4: return 4;
+        case ElementType::Tet4: return 4;
+        case ElementType::Hex8: return 8;
     }
     return 0;
 }
 
 std::string element_name(ElementType type) {
     switch (type) {
-        case ElementType::Tri3:
-            return "tri";
-        case ElementType::Quad4:
-            return "quad";
-        case ElementType::Tet4:
-            return "tet";
-        case ElementType::Hex8:
-            return "hex";
+        case ElementType::Tri3: return "tri";
+        case ElementType::Quad4: return "quad";
+        case ElementType::Tet4: return "tet";
+        case ElementType::Hex8: return "hex";
     }
     return "?";
 }
 
-bool is_simplex(ElementType type) { return type == ElementType::Tri3 || type == ElementType::Tet4; }
+bool is_simplex(ElementType type) {
+    return type == ElementType::Tri3 || type == ElementType::Tet4;
+}
 
 Eigen::Vector3d GridInfo::spacing() const {
     return ((max - min).array() / cells.cast<double>().array()).matrix();
@@ -121,15 +116,12 @@ double quad_min_corner_jacobian(const Matrix& X) {
 double element_measure(const Mesh& mesh, Index e) {
     const Matrix X = mesh.element_positions(e);
     switch (mesh.type) {
-        case ElementType::Tri3:
-            return triangle_area(X.row(0), X.row(1), X.row(2));
+        case ElementType::Tri3: return triangle_area(X.row(0), X.row(1), X.row(2));
         case ElementType::Quad4:
             return triangle_area(X.row(0), X.row(1), X.row(2)) +
                    triangle_area(X.row(0), X.row(2), X.row(3));
-        case ElementType::Tet4:
-            return tet_volume(X.row(0), X.row(1), X.row(2), X.row(3));
-        case ElementType::Hex8:
-            return hex_volume(X);
+        case ElementType::Tet4: return tet_volume(X.row(0), X.row(1), X.row(2), X.row(3));
+        case ElementType::Hex8: return hex_volume(X);
     }
     return 0.0;
 }
@@ -168,8 +160,8 @@ void validate(const Mesh& mesh, const std::string& source) {
     const int npe = nodes_per_element(mesh.type);
     const int dim = mesh.dim();
     CG_VERIFY(mesh.rest_positions.cols() == dim,
-              "{}: {} mesh needs {} coordinates per node, got {}", source, element_name(mesh.type),
-              dim, mesh.rest_positions.cols());
+              "{}: {} mesh needs {} coordinates per node, got {}", source,
+              element_name(mesh.type), dim, mesh.rest_positions.cols());
     CG_VERIFY(mesh.num_nodes() > 0, "{}: the mesh has no nodes", source);
     CG_VERIFY(mesh.num_elements() > 0, "{}: the mesh has no {} elements", source,
               element_name(mesh.type));
@@ -179,13 +171,13 @@ void validate(const Mesh& mesh, const std::string& source) {
               "{}: {} material ids for {} elements", source, mesh.material_ids.size(),
               mesh.num_elements());
     for (Index v = 0; v < mesh.num_nodes(); ++v)
-        CG_VERIFY(mesh.rest_positions.row(v).allFinite(), "{}: node {} has a non-finite coordinate",
-                  source, v);
+        CG_VERIFY(mesh.rest_positions.row(v).allFinite(),
+                  "{}: node {} has a non-finite coordinate", source, v);
     for (Index e = 0; e < mesh.num_elements(); ++e)
         for (int a = 0; a < npe; ++a)
             CG_VERIFY(mesh.elements(e, a) >= 0 && mesh.elements(e, a) < mesh.num_nodes(),
-                      "{}: element {} refers to node {}, but nodes are numbered 0..{}", source, e,
-                      mesh.elements(e, a), mesh.num_nodes() - 1);
+                      "{}: element {} refers to node {}, but nodes are numbered 0..{}", source,
+                      e, mesh.elements(e, a), mesh.num_nodes() - 1);
     for (Index e = 0; e < mesh.num_elements(); ++e) {
         const Matrix X = mesh.element_positions(e);
         const double h = (X.colwise().maxCoeff() - X.colwise().minCoeff()).maxCoeff();

@@ -28,8 +28,8 @@ bool is_simplex(ElementType type);
 /// Description of a regular axis-aligned grid. Set on meshes made by make_grid: all elements
 /// of a quad/hex grid are congruent, so element matrices can be computed once.
 struct GridInfo {
-    Eigen::Vector3d min = Eigen::Vector3d::Zero();    ///< lower corner (z unused in 2D)
-    Eigen::Vector3d max = Eigen::Vector3d::Ones();    ///< upper corner
+    Eigen::Vector3d min = Eigen::Vector3d::Zero();  ///< lower corner (z unused in 2D)
+    Eigen::Vector3d max = Eigen::Vector3d::Ones();  ///< upper corner
     Eigen::Vector3i cells = Eigen::Vector3i::Ones();  ///< cells per axis (z = 1 in 2D)
     /// Cell size along each axis.
     Eigen::Vector3d spacing() const;
@@ -38,9 +38,9 @@ struct GridInfo {
 /// A mesh with a single element type.
 struct Mesh {
     ElementType type = ElementType::Tet4;
-    Matrix rest_positions;     ///< #V by dim rest positions
-    IndexMatrix elements;      ///< #E by nodes_per_element(type), orderings as in ElementType
-    IndexVector material_ids;  ///< #E material id of each element (Gmsh physical tag, grid field)
+    Matrix rest_positions;       ///< #V by dim rest positions
+    IndexMatrix elements;        ///< #E by nodes_per_element(type), orderings as in ElementType
+    IndexVector material_ids;    ///< #E material id of each element (Gmsh physical tag, grid field)
     std::optional<GridInfo> grid;  ///< set when the mesh is a regular grid (see make_grid)
 
     int dim() const { return element_dim(type); }
