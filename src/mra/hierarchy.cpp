@@ -318,10 +318,12 @@ void validate_level_meshes(const std::vector<mesh::Mesh>& coarser_levels,
 namespace {
 
 /// build_hierarchy on the fine operator given either over all DOFs (K) or already without the
-/// Dirichlet DOFs (A_free, moved into Hierarchy::A_fine), on nested grids (meshes null: `mesh`
-/// is a grid) or on level meshes (the coarser levels, coarsest first; `mesh` is level q).
+/// Dirichlet DOFs (A_free, read in place: Hierarchy::A_fine stays empty), on nested grids
+/// (meshes null: `mesh` is a grid) or on level meshes (the coarser levels, coarsest first;
+/// `mesh` is level q).
 Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
-                const SparseMatrix* K, SparseMatrix* A_free, const std::vector<Index>& fixed_dofs,
+                const SparseMatrix* K, const SparseMatrix* A_free,
+                const std::vector<Index>& fixed_dofs,
                 const Options& options, const material::ElementMaterials* materials) {
     const bool on_grid = meshes == nullptr;
     CG_VERIFY(!on_grid || mesh.grid.has_value(),
@@ -405,8 +407,8 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                                                    ? options.penalty
                                                    : options.penalty * K->coeff(d, d);
             h.A_fine.makeCompressed();
-        } else {
-            h.A_fine = K ? principal_submatrix(*K, h.fine_dofs) : std::move(*A_free);
+        } else if (K) {
+            h.A_fine = principal_submatrix(*K, h.fine_dofs);
         }
     }
 
@@ -466,7 +468,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
     };
     // A^{k+1} with both triangles, as the products take it: the fine operator, then a transient
     // copy of the level above (Level::A keeps the lower triangle).
-    const SparseMatrix* A_next = &h.A_fine;
+    const SparseMatrix* A_next = K ? &h.A_fine : A_free;
     SparseMatrix A_full;
     IndexVector dofs_next = h.fine_dofs;
     for (int k = q - 1; k >= 1; --k) {
@@ -536,10 +538,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         SparseMatrix R;
         {
             const Phase phase(tag + "B", &h.timings);
-            const SparseMatrix AWt = product(A, SparseMatrix(L.W.transpose()));
-            L.B = detail::symmetrized(product(L.W, AWt));
+            L.B = detail::symmetrized(
+                detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
             if (!by_cell || std::isinf(L.radius))
-                R = product(SparseMatrix(AWt.transpose()), SparseMatrix(L.C_dagger.transpose()));
+                R = detail::triple_product(L.W, A, SparseMatrix(L.C_dagger.transpose()));
         }
         const int rings = std::isinf(L.radius) ? 0 : to_rings(L.radius, k);
         SparseMatrix Ct;  // C̃^k while it is built and used here; kept as L.C_adapted (runs)
@@ -702,7 +704,7 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
     return build(mesh, nullptr, &K, nullptr, fixed_dofs, options, materials);
 }
 
-Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
+Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, const SparseMatrix& A_free,
                                const std::vector<Index>& fixed_dofs, const Options& options,
                                const material::ElementMaterials* materials) {
     return build(mesh, nullptr, nullptr, &A_free, fixed_dofs, options, materials);

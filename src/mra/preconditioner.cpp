@@ -95,9 +95,9 @@ MultigridPreconditioner::MultigridPreconditioner(Hierarchy h, const SparseMatrix
               "mra-pcg: the hierarchy must eliminate the Dirichlet DOFs (eliminate or "
               "constrain), not {}",
               dirichlet_name(t));
-    CG_VERIFY(A.rows() == m_h.A_fine.rows() && A.cols() == A.rows(),
+    CG_VERIFY(A.rows() == m_h.fine_dofs.size() && A.cols() == A.rows(),
               "mra-pcg: the fine operator is {}x{}, the hierarchy's {}", A.rows(), A.cols(),
-              m_h.A_fine.rows());
+              m_h.fine_dofs.size());
     m_h.A_fine = SparseMatrix();
     const int q = m_h.num_levels();
     m_levels.resize(static_cast<std::size_t>(q));

@@ -108,6 +108,58 @@ SparseMatrix sparse_product(const SparseMatrix& X, const SparseMatrix& Y) {
     return from_columns(m, n, rows, values);
 }
 
+/// One thread's scratch of triple_product: dense accumulators over the rows of A Y and of W A Y
+/// with their patterns.
+struct TripleScratch {
+    std::vector<double> mid, out;
+    std::vector<char> mid_used, out_used;
+    std::vector<Index> mid_pattern, out_pattern;
+
+    TripleScratch(Index n, Index m)
+        : mid(static_cast<std::size_t>(n), 0.0), out(static_cast<std::size_t>(m), 0.0),
+          mid_used(static_cast<std::size_t>(n), 0), out_used(static_cast<std::size_t>(m), 0) {}
+
+    /// Accumulates column j of W (A Y) into out over out_pattern (unsorted), values only if
+    /// `values`; leaves mid clean.
+    void column(const SparseMatrix& W, const SparseMatrix& A, const SparseMatrix& Y, Index j,
+                bool values) {
+        mid_pattern.clear();
+        out_pattern.clear();
+        for (SparseMatrix::InnerIterator y(Y, j); y; ++y)
+            scatter(A, y.row(), y.value(), mid, mid_used, mid_pattern, values);
+        for (const Index i : mid_pattern) {
+            const auto r = static_cast<std::size_t>(i);
+            scatter(W, i, mid[r], out, out_used, out_pattern, values);
+            mid[r] = 0.0;
+            mid_used[r] = 0;
+        }
+    }
+
+    /// acc += value * X(:, k) over the pattern.
+    static void scatter(const SparseMatrix& X, Index k, double value, std::vector<double>& acc,
+                        std::vector<char>& used, std::vector<Index>& pattern, bool values) {
+        const Index begin = X.outerIndexPtr()[k], end = X.outerIndexPtr()[k + 1];
+        const Index* rows = X.innerIndexPtr();
+        const double* v = X.valuePtr();
+        for (Index p = begin; p < end; ++p) {
+            const auto r = static_cast<std::size_t>(rows[p]);
+            if (!used[r]) {
+                used[r] = 1;
+                pattern.push_back(rows[p]);
+            }
+            if (values) acc[r] += v[p] * value;
+        }
+    }
+
+    /// Clears the output accumulator's marks (and values).
+    void clear_out() {
+        for (const Index i : out_pattern) {
+            out[static_cast<std::size_t>(i)] = 0.0;
+            out_used[static_cast<std::size_t>(i)] = 0;
+        }
+    }
+};
+
 /// Whether the dense forms of X, Y and X Y fit.
 bool dense_product_fits(const SparseMatrix& X, const SparseMatrix& Y) {
     return entries(X) <= kDenseProductMaxEntries && entries(Y) <= kDenseProductMaxEntries &&
@@ -418,8 +470,52 @@ SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y) {
     return dense_product_pays(X, Y) ? dense_product(X, Y) : sparse_product(X, Y);
 }
 
-SparseMatrix symmetrized(const SparseMatrix& M) {
-    SparseMatrix S = M;
+SparseMatrix triple_product(const SparseMatrix& W, const SparseMatrix& A, const SparseMatrix& Y) {
+    CG_VERIFY(W.cols() == A.rows() && A.cols() == Y.rows(),
+              "mra: triple product of {}x{}, {}x{} and {}x{} matrices", W.rows(), W.cols(),
+              A.rows(), A.cols(), Y.rows(), Y.cols());
+    if (!W.isCompressed() || !A.isCompressed() || !Y.isCompressed()) {
+        SparseMatrix Wc = W, Ac = A, Yc = Y;
+        Wc.makeCompressed();
+        Ac.makeCompressed();
+        Yc.makeCompressed();
+        return triple_product(Wc, Ac, Yc);
+    }
+    if (dense_product_pays(A, Y)) return product(W, product(A, Y));
+    const Index m = W.rows(), n = Y.cols();
+    SparseMatrix P(m, n);
+    Index* outer = P.outerIndexPtr();
+    // Pass 1: each column's pattern size; pass 2: its values, written in place.
+    for (const bool values : {false, true}) {
+        if (values) {
+            outer[0] = 0;
+            for (Index j = 0; j < n; ++j) outer[j + 1] += outer[j];
+            P.resizeNonZeros(outer[n]);
+        }
+#pragma omp parallel if (n >= kMinParallelProductColumns)
+        {
+            TripleScratch s(A.rows(), m);
+#pragma omp for schedule(dynamic, kProductChunk)
+            for (Index j = 0; j < n; ++j) {
+                s.column(W, A, Y, j, values);
+                if (!values) {
+                    outer[j + 1] = static_cast<Index>(s.out_pattern.size());
+                } else {
+                    std::sort(s.out_pattern.begin(), s.out_pattern.end());
+                    Index p = outer[j];
+                    for (const Index i : s.out_pattern) {
+                        P.innerIndexPtr()[p] = i;
+                        P.valuePtr()[p++] = s.out[static_cast<std::size_t>(i)];
+                    }
+                }
+                s.clear_out();
+            }
+        }
+    }
+    return P;
+}
+
+SparseMatrix symmetrized(SparseMatrix S) {
     S.makeCompressed();
     // A structurally symmetric M (as the sparse products keep their structural patterns): each
     // entry averaged with its mirror, found in O(1) by a cursor per column (visiting the columns
@@ -448,7 +544,8 @@ SparseMatrix symmetrized(const SparseMatrix& M) {
         mirrored = q == outer[i + 1] || inner[q] > i;
     }
     if (mirrored) return S;
-    S = 0.5 * (M + SparseMatrix(M.transpose()));
+    // The pairs averaged before the mismatch hold their mean twice, which the sum keeps.
+    S = 0.5 * (S + SparseMatrix(S.transpose()));
     S.makeCompressed();
     return S;
 }

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "../../src/mra/products.hpp"
+#include "coarsegrain/common/error.hpp"
 
 namespace coarsegrain::mra::detail {
 namespace {
@@ -49,6 +50,65 @@ TEST(MraCongruence, EveryKernelIsTheGalerkinProduct) {
             EXPECT_LT((Matrix(A) - lower).norm(), 1e-13 * expected.norm())
                 << "M " << m_density << ", X " << x_density;
         }
+}
+
+// W A Y fused: the dense product to round-off, with the structural pattern of the two sparse
+// products (a column of Y hitting only cancelling entries keeps them as stored zeros), for a
+// W wider than tall (B^k) and Y wide (R), with 400 columns so that both threads take part;
+// through product when A Y pays dense.
+TEST(MraTripleProduct, IsTheProductOfThree) {
+    for (const double a_density : {0.02, 0.6}) {
+        const SparseMatrix W = random_sparse(300, 500, 0.01, 3);
+        const SparseMatrix A = random_sparse(500, 500, a_density, 5);
+        const SparseMatrix Y = random_sparse(500, 400, 0.01, 9);
+        const SparseMatrix P = triple_product(W, A, Y);
+        const Matrix expected = Matrix(W) * Matrix(A) * Matrix(Y);
+        ASSERT_EQ(P.rows(), 300);
+        ASSERT_EQ(P.cols(), 400);
+        EXPECT_LT((Matrix(P) - expected).norm(), 1e-13 * expected.norm()) << a_density;
+        if (a_density < 0.1) {  // sparse: the same pattern as the two sparse products
+            const SparseMatrix two = product(W, product(A, Y));
+            EXPECT_EQ(P.nonZeros(), two.nonZeros());
+        }
+    }
+}
+
+TEST(MraTripleProduct, KeepsCancellationsAsStructuralZeros) {
+    // A Y = (1, -1, 0, ...) and W = (1 1 0 ...): the single entry cancels, kept as a stored
+    // zero (100 columns: small enough, A Y would go dense, which stores nonzeros only).
+    SparseMatrix W(1, 100), A(100, 100), Y(100, 1);
+    W.insert(0, 0) = 1.0;
+    W.insert(0, 1) = 1.0;
+    A.insert(0, 0) = 1.0;
+    A.insert(1, 0) = -1.0;
+    Y.insert(0, 0) = 1.0;
+    const SparseMatrix P = triple_product(W, A, Y);  // uncompressed inputs are compressed first
+    ASSERT_EQ(P.nonZeros(), 1);
+    EXPECT_EQ(P.coeff(0, 0), 0.0);
+}
+
+TEST(MraTripleProduct, RefusesMismatchedSizes) {
+    EXPECT_THROW(triple_product(SparseMatrix(2, 3), SparseMatrix(4, 4), SparseMatrix(4, 1)),
+                 Error);
+    EXPECT_THROW(triple_product(SparseMatrix(2, 4), SparseMatrix(4, 4), SparseMatrix(3, 1)),
+                 Error);
+}
+
+// In place for a structurally symmetric matrix: the storage is the argument's.
+TEST(MraSymmetrized, AveragesInPlaceOrThroughTheTranspose) {
+    const SparseMatrix half = random_sparse(50, 50, 0.1, 13);
+    SparseMatrix M = SparseMatrix(half + SparseMatrix(half.transpose()));
+    for (Index j = 0; j < M.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(M, j); it; ++it) it.valueRef() *= 1.0 + 0.01 * it.row();
+    M.makeCompressed();
+    const Matrix expected = 0.5 * (Matrix(M) + Matrix(M).transpose());
+    const double* storage = M.valuePtr();
+    const SparseMatrix S = symmetrized(std::move(M));
+    EXPECT_EQ(S.valuePtr(), storage);
+    EXPECT_LT((Matrix(S) - expected).norm(), 1e-15 * expected.norm());
+    const SparseMatrix U = random_sparse(40, 40, 0.1, 17);  // not structurally symmetric
+    EXPECT_LT((Matrix(symmetrized(U)) - 0.5 * (Matrix(U) + Matrix(U).transpose())).norm(),
+              1e-15 * Matrix(U).norm());
 }
 
 }  // namespace

@@ -126,12 +126,13 @@ Hierarchy build_hierarchy(const mesh::Mesh& mesh, const SparseMatrix& K,
                           const material::ElementMaterials* materials = nullptr);
 
 /// build_hierarchy on a fine operator already restricted to the DOFs free of the Dirichlet
-/// conditions (all DOFs of `mesh` but `fixed_dofs`, ascending, as fem::reduce makes it), which
-/// becomes Hierarchy::A_fine without a copy over all DOFs: for the Eliminate and Constrain
-/// treatments and canonical measurements (the others need the DOFs the conditions remove).
+/// conditions (all DOFs of `mesh` but `fixed_dofs`, ascending, as fem::reduce makes it), for the
+/// Eliminate and Constrain treatments and canonical measurements (the others need the DOFs the
+/// conditions remove). A_free is read by the build but neither copied nor kept: the result's
+/// A_fine is empty (0 x 0), A^q stays the caller's (the multigrid preconditioner's use).
 /// @throws Error as build_hierarchy, or if A_free is not #free DOFs square or the options need
 ///         the operator over all DOFs
-Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, SparseMatrix A_free,
+Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, const SparseMatrix& A_free,
                                const std::vector<Index>& fixed_dofs, const Options& options,
                                const material::ElementMaterials* materials = nullptr);
 

@@ -33,7 +33,8 @@ int preconditioner_levels(const Eigen::Vector3i& cells, int dim,
 class MultigridPreconditioner : public solve::Preconditioner {
   public:
     /// @param h  a hierarchy built with DirichletTreatment::Eliminate or Constrain on the fine
-    ///           operator A (its A_fine is released: the cycle uses A, which must outlive this)
+    ///           operator A (build_hierarchy_free; an A_fine is released: the cycle uses A,
+    ///           which must outlive this)
     /// @param A  the fine operator on the hierarchy's fine DOFs, both triangles stored
     /// @throws Error if A is not the hierarchy's fine operator size, or on a boundary-blind or
     ///         penalized hierarchy; NotPositiveDefinite if A^1 is not positive definite
