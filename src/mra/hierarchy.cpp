@@ -573,8 +573,12 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             L.region_rings = std::move(lz.rings);
         }
         R = SparseMatrix();
-        L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
-        L.B.makeCompressed();
+        if (options.store_wavelet_stiffness) {
+            L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
+            L.B.makeCompressed();
+        } else {
+            L.B = SparseMatrix();
+        }
 
         // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node (their
         // pivots' finest node); blind, the DOFs held at zero when this level is solved.

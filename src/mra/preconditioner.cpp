@@ -110,7 +110,7 @@ MultigridPreconditioner::MultigridPreconditioner(Hierarchy h, const SparseMatrix
             L.owned = symmetric_from_lower(hl.A);
             L.A = &L.owned;
             hl.A = SparseMatrix();  // the cycle's copy replaces it
-            hl.B = SparseMatrix();  // not needed by the cycle
+            hl.B = SparseMatrix();  // not needed by the cycle (if the build kept it)
             Level& finer = m_levels[static_cast<std::size_t>(k)];
             finer.restriction = RowMatrix(hl.C_adapted.sparse());
             finer.prolongation = RowMatrix(finer.restriction.transpose());
@@ -186,6 +186,7 @@ solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& grid,
     o.levels = preconditioner_levels(grid.grid->cells, grid.dim(), options);
     o.radius = {options.radius};
     o.dirichlet = DirichletTreatment::Eliminate;
+    o.store_wavelet_stiffness = false;
     auto mesh = std::make_shared<const mesh::Mesh>(grid);
     auto fixed = std::make_shared<const std::vector<Index>>(std::move(fixed_dofs));
     const int degree = options.smoother_degree;

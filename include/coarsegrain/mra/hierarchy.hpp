@@ -53,7 +53,7 @@ struct Level {
     /// included (symmetric_from_lower gives the whole matrix).
     SparseMatrix A;
     /// B^k = W^k A^{k+1} W^{k,T} (Alg. 1 line 2), symmetric: its lower triangle, diagonal
-    /// included.
+    /// included (0 x 0 without Options::store_wavelet_stiffness).
     SparseMatrix B;
     SparseMatrix Phi;  ///< Φ^k = C̃^k Φ^{k+1}: #dofs by fine grid DOFs (if store_bases, else 0x0)
     SparseMatrix Psi;   ///< Ψ^k = W^k Φ^{k+1}: #wavelets by fine grid DOFs (if store_bases)

@@ -161,6 +161,11 @@ struct Options {
     /// more entries than all C̃^k together (128x128 quads, 3 levels: 12 GB), and basis() and
     /// reconstruct() give Φ^k and Φ^{k,T} u^k on demand from the C̃^k.
     bool store_bases = false;
+    /// Keep B^k in every Level (the wavelet solves of the multilevel solver, the diagnostics, the
+    /// reports and the Python module read it). The multigrid preconditioner turns it off: after
+    /// localized solves B^k is the largest matrix of a step (5.5e7 entries in the fine step of
+    /// a 48^3 hex grid at radius 1, twice A^{k+1}) and the cycle does not read it.
+    bool store_wavelet_stiffness = true;
     /// The fine element (the scene's "fem" block), for the element matrices the construction
     /// computes itself: the cell-localized solves' A_T and the coarsest cells' own hierarchies.
     /// It must be that of the fine K given to build_hierarchy.
