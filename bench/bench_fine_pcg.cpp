@@ -219,7 +219,22 @@ class HypreAmg {
     bool m_setup = false;
 };
 
-/// One configuration in this process: a JSON line on stdout.
+/// One configuration in this process: a JSON line on stdout (with "error" if the solver refused
+/// or failed, e.g. CHOLMOD out of memory).
+int run_one(const std::string& backend, int n, const std::string& field, double contrast);
+
+int run_one_caught(const std::string& backend, int n, const std::string& field,
+                   double contrast) {
+    try {
+        return run_one(backend, n, field, contrast);
+    } catch (const std::exception& e) {
+        const nlohmann::json out = {{"backend", backend}, {"error", e.what()},
+                                    {"peak_gb", peak_rss_gb()}};
+        fmt::print("{}\n", out.dump());
+        return 0;
+    }
+}
+
 int run_one(const std::string& backend, int n, const std::string& field, double contrast) {
     const scene::Scene sc = scene::parse_scene(cube_scene(n, field, contrast), "cube", "");
     nlohmann::json out = {{"backend", backend}, {"n", n}, {"field", field}, {"contrast", contrast}};
@@ -315,10 +330,11 @@ std::vector<std::string> split(const std::string& s) {
 int main(int argc, char** argv) {
     if (argc == 6 && std::string(argv[1]) == "--one") {
         if (std::string(argv[2]) != "amg")
-            return run_one(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]));
+            return run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]));
         MPI_Init(&argc, &argv);
         HYPRE_Init();
-        const int code = run_one(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]));
+        const int code =
+            run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]));
         HYPRE_Finalize();
         MPI_Finalize();
         return code;
@@ -362,6 +378,14 @@ int main(int argc, char** argv) {
                         continue;
                     }
                     const nlohmann::json r = nlohmann::json::parse(text);
+                    if (r.contains("error")) {
+                        rows.push_back(fmt::format(
+                            "| {}^3 | {} | {} | - | {} | failed after {:.2f} GB peak: {} |||||||", n,
+                            field, contrast, backend, r["peak_gb"].get<double>(),
+                            r["error"].get<std::string>()));
+                        fmt::print("{}\n", rows.back());
+                        continue;
+                    }
                     const bool pcg = backend != "cholmod";
                     const std::string its = pcg ? fmt::format("{} / {}", r["iterations"].get<int>(),
                                                               r["iterations2"].get<int>())
