@@ -2,6 +2,7 @@
 // exact multilevel solve of Sec. 3.6.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <tuple>
 
 #include "coarsegrain/mra/multilevel_solver.hpp"
@@ -144,6 +145,28 @@ TEST(MraClosedForm, AdaptedRefinementIsTheConstrainedMinimizer) {
         const Matrix A1 = (C * AinvCt).inverse();
         EXPECT_LT((Matrix(symmetric_from_lower(L.A)) - A1).norm(), 1e-10 * A1.norm())
             << refinement_name(r);
+    }
+}
+
+// Without store_wavelet_stiffness (the preconditioner's build) B^k is dropped and nothing else
+// changes: the same C̃^k and A^k bit for bit, localized (radius 1, as mra-pcg) and global.
+TEST(MraWaveletStiffness, DroppingItChangesNoOtherOperator) {
+    const test::GridProblem p =
+        test::hung_problem(3, Eigen::Vector3i(8, 8, 8), 1.0, 1e3, test::checker_pattern);
+    for (const double radius : {1.0, std::numeric_limits<double>::infinity()}) {
+        Options o = test::exact_options(3, Refinement::Linear);
+        o.radius = {radius};
+        const Hierarchy kept = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+        o.store_wavelet_stiffness = false;
+        const Hierarchy dropped = build_hierarchy(p.mesh, p.K, p.bc.dofs, o);
+        for (int k = 1; k < kept.num_levels(); ++k) {
+            EXPECT_GT(kept.level(k).B.nonZeros(), 0);
+            EXPECT_EQ(dropped.level(k).B.rows(), 0);
+            EXPECT_EQ(Matrix(dropped.level(k).C_adapted.sparse()),
+                      Matrix(kept.level(k).C_adapted.sparse()))
+                << "radius " << radius << ", level " << k;
+            EXPECT_EQ(Matrix(dropped.level(k).A), Matrix(kept.level(k).A));
+        }
     }
 }
 

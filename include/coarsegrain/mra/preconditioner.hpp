@@ -64,7 +64,8 @@ class MultigridPreconditioner : public solve::Preconditioner {
 /// stiffness (or a step operator) restricted to the free DOFs (all DOFs of `grid` but
 /// `fixed_dofs`, in order, as fem::reduce makes it), builds the hierarchy on it (linear
 /// refinement, node localization at options.radius, Dirichlet DOFs eliminated, truncation 1e-7,
-/// invariance correction) and the V-cycle. Phases "mra-pcg: hierarchy" and "mra-pcg: cycle".
+/// invariance correction; B^k dropped once used, Options::store_wavelet_stiffness) and the
+/// V-cycle. Phases "mra-pcg: hierarchy" and "mra-pcg: cycle".
 /// @param grid        the fine mesh, a grid (mesh::make_grid); copied
 /// @param fixed_dofs  the Dirichlet DOFs, sorted
 /// @throws Error (when called) if the matrix is not #free DOFs square, or as build_hierarchy
