@@ -517,7 +517,7 @@ SparseMatrix triple_product(const SparseMatrix& W, const SparseMatrix& A, const 
 
 SparseMatrix symmetrized(SparseMatrix S) {
     S.makeCompressed();
-    // A structurally symmetric M (as the sparse products keep their structural patterns): each
+    // A structurally symmetric S (as the sparse products keep their structural patterns): each
     // entry averaged with its mirror, found in O(1) by a cursor per column (visiting the columns
     // in order meets the entries of each column in row order), instead of adding a transposed
     // copy. Both give 0.5 (m_ij + m_ji), bit for bit.

@@ -88,7 +88,9 @@ struct Hierarchy {
     Matrix fine_positions;             ///< level meshes only: the fine mesh's node positions
     std::vector<double> edge_lengths;  ///< level meshes only: mean edge length of levels 1..q
     IndexVector fine_dofs;  ///< present DOFs of level q (all but the eliminated fixed ones)
-    SparseMatrix A_fine;    ///< A^q: the fine stiffness on fine_dofs (+ penalty)
+    /// A^q: the fine stiffness on fine_dofs (+ penalty); empty (0 x 0) after
+    /// build_hierarchy_free, whose caller keeps it.
+    SparseMatrix A_fine;
     /// DirichletTreatment::Ignore only: positions in fine_dofs of the fixed DOFs (A_fine is then
     /// the unconstrained stiffness on every grid DOF).
     IndexVector fine_fixed;
