@@ -22,7 +22,9 @@
 //
 //   OMP_NUM_THREADS=2 OPENBLAS_NUM_THREADS=2 build/release/bench/bench_fine_pcg
 //       [--sizes 32,48] [--contrasts 1e3,1e6] [--fields checker,spheres]
-//       [--backends cholmod,mra-pcg,amg] [--out FILE]
+//       [--backends cholmod,mra-pcg,amg] [--levels Q] [--radius R] [--degree D] [--out FILE]
+// (--levels, --radius, --degree: mra-pcg's solver.levels, solver.radius and
+// solver.smoother_degree; default the scene's defaults: automatic levels, radius 1, degree 3.)
 #include <fmt/format.h>
 #include <sys/resource.h>
 
@@ -221,12 +223,13 @@ class HypreAmg {
 
 /// One configuration in this process: a JSON line on stdout (with "error" if the solver refused
 /// or failed, e.g. CHOLMOD out of memory).
-int run_one(const std::string& backend, int n, const std::string& field, double contrast);
+int run_one(const std::string& backend, int n, const std::string& field, double contrast,
+            const mra::PreconditionerOptions& mra_options);
 
-int run_one_caught(const std::string& backend, int n, const std::string& field,
-                   double contrast) {
+int run_one_caught(const std::string& backend, int n, const std::string& field, double contrast,
+                   const mra::PreconditionerOptions& mra_options) {
     try {
-        return run_one(backend, n, field, contrast);
+        return run_one(backend, n, field, contrast, mra_options);
     } catch (const std::exception& e) {
         const nlohmann::json out = {{"backend", backend}, {"error", e.what()},
                                     {"peak_gb", peak_rss_gb()}};
@@ -235,7 +238,8 @@ int run_one_caught(const std::string& backend, int n, const std::string& field,
     }
 }
 
-int run_one(const std::string& backend, int n, const std::string& field, double contrast) {
+int run_one(const std::string& backend, int n, const std::string& field, double contrast,
+            const mra::PreconditionerOptions& mra_options) {
     const scene::Scene sc = scene::parse_scene(cube_scene(n, field, contrast), "cube", "");
     nlohmann::json out = {{"backend", backend}, {"n", n}, {"field", field}, {"contrast", contrast}};
     auto t0 = Clock::now();
@@ -291,7 +295,7 @@ int run_one(const std::string& backend, int n, const std::string& field, double 
     } else {
         t0 = Clock::now();
         const auto factory =
-            mra::hierarchy_preconditioner(model.mesh, model.bc.dofs, sc.preconditioner);
+            mra::hierarchy_preconditioner(model.mesh, model.bc.dofs, mra_options);
         const std::unique_ptr<solve::Preconditioner> M = factory(sys.K);
         out["setup_s"] = seconds_since(t0);
         const auto* mg = dynamic_cast<const mra::MultigridPreconditioner*>(M.get());
@@ -328,19 +332,25 @@ std::vector<std::string> split(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc == 6 && std::string(argv[1]) == "--one") {
+    if (argc == 9 && std::string(argv[1]) == "--one") {
+        mra::PreconditionerOptions mra_options;
+        mra_options.levels = std::atoi(argv[6]);
+        mra_options.radius = std::atof(argv[7]);
+        mra_options.smoother_degree = std::atoi(argv[8]);
+        mra::validate(mra_options);
         if (std::string(argv[2]) != "amg")
-            return run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]));
+            return run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]),
+                                  mra_options);
         MPI_Init(&argc, &argv);
         HYPRE_Init();
-        const int code =
-            run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]));
+        const int code = run_one_caught(argv[2], std::atoi(argv[3]), argv[4],
+                                        std::atof(argv[5]), mra_options);
         HYPRE_Finalize();
         MPI_Finalize();
         return code;
     }
     std::string sizes = "32,48", contrasts = "1e3,1e6", fields = "checker,spheres",
-                backends = "cholmod,mra-pcg,amg",
+                backends = "cholmod,mra-pcg,amg", levels = "0", radius = "1", degree = "3",
                 out = std::string(COARSEGRAIN_SOURCE_DIR) + "/docs/fine_pcg_bench.md";
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string key = argv[i], value = argv[i + 1];
@@ -352,6 +362,12 @@ int main(int argc, char** argv) {
             fields = value;
         else if (key == "--backends")
             backends = value;
+        else if (key == "--levels")
+            levels = value;
+        else if (key == "--radius")
+            radius = value;
+        else if (key == "--degree")
+            degree = value;
         else if (key == "--out")
             out = value;
         else {
@@ -368,7 +384,8 @@ int main(int argc, char** argv) {
             for (const std::string& contrast : split(contrasts))
                 for (const std::string& backend : split(backends)) {
                     const std::string cmd =
-                        fmt::format("{} --one {} {} {} {}", argv[0], backend, n, field, contrast);
+                        fmt::format("{} --one {} {} {} {} {} {} {}", argv[0], backend, n, field,
+                                    contrast, levels, radius, degree);
                     std::FILE* pipe = popen(cmd.c_str(), "r");
                     std::string text;
                     char buffer[4096];
@@ -412,8 +429,8 @@ int main(int argc, char** argv) {
          << "N^3 hex cubes clamped at z = 0 under gravity, materials a checkerboard of cubes of "
             "side 1/8 or a 4^3 lattice of stiff spheres (radius 0.09) in a soft matrix, at the "
             "stiffness contrast given; every iterative solve to a 1e-8 relative residual. "
-            "Set-up: CHOLMOD's analysis and factorization; mra-pcg's hierarchy build (radius 1) "
-            "and V-cycle set-up; BoomerAMG's set-up. Solve: the gravity load; 2nd rhs: gravity "
+            "Set-up: CHOLMOD's analysis and factorization; mra-pcg's hierarchy build and "
+            "V-cycle set-up; BoomerAMG's set-up. Solve: the gravity load; 2nd rhs: gravity "
             "along x with the factorization or preconditioner kept. Iterations: first / second "
             "right-hand side. Residual: ||f - K u|| / ||f|| of the first answer, computed apart. "
             "Peak GB: the process's peak resident memory (each configuration runs in its own "
@@ -421,7 +438,8 @@ int main(int argc, char** argv) {
             "    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 build/release/bench/bench_fine_pcg "
             "--sizes "
          << sizes << " --fields " << fields << " --contrasts " << contrasts << " --backends "
-         << backends << "\n\n";
+         << backends << " --levels " << levels << " --radius " << radius << " --degree " << degree
+         << "\n\n";
     for (const std::string& row : rows) file << row << "\n";
     fmt::print(stderr, "wrote {}\n", out);
     return 0;

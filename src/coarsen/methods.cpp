@@ -59,7 +59,7 @@ CoarseModel hierarchy_model(const scene::Scene& scene, const scene::FineModel& f
         throw;
     } catch (const Error& e) {
         if (!seconds) throw;
-        throw Error(
+        e.rethrow_with(
             fmt::format("{}: coarse.levels: {} (on the automatic level meshes: use fewer "
                         "levels or give coarse.level_meshes)",
                         scene.source, e.what()));

@@ -34,14 +34,14 @@ void parallel_for(Index n, F&& f) {
     if (error) std::rethrow_exception(error);
 }
 
-/// Runs f() for element e; an Error it throws is rethrown with "element e: " in front, so a
-/// kernel's message (e.g. an inverted element) names the element.
+/// Runs f() for element e; an Error it throws is rethrown, its type kept, with "element e: " in
+/// front, so a kernel's message (e.g. an inverted element) names the element.
 template <class F>
 decltype(auto) for_element(Index e, F&& f) {
     try {
         return f();
     } catch (const Error& error) {
-        throw Error(fmt::format("element {}: {}", e, error.what()));
+        error.rethrow_with(fmt::format("element {}: {}", e, error.what()));
     }
 }
 

@@ -262,7 +262,7 @@ RsWarp::RsWarp(const mesh::Mesh& mesh, const Dirichlet& bc, const solve::SolverO
     try {
         free_dofs(n, bc);  // validates bc: sorted, unique, in range
     } catch (const Error& error) {
-        throw Error(fmt::format("RsWarp: {}", error.what()));
+        error.rethrow_with(fmt::format("RsWarp: {}", error.what()));
     }
     CG_VERIFY(bc.values.allFinite(), "RsWarp: a Dirichlet value is not finite");
     w.elements = mesh.elements;
@@ -299,7 +299,7 @@ RsWarp::RsWarp(const mesh::Mesh& mesh, const Dirichlet& bc, const solve::SolverO
                 laplacian<S>(mesh, w, L);
             });
         } catch (const Error& error) {
-            throw Error(fmt::format("RsWarp: {}", error.what()));
+            error.rethrow_with(fmt::format("RsWarp: {}", error.what()));
         }
     }
 
@@ -353,12 +353,9 @@ RsWarp::RsWarp(const mesh::Mesh& mesh, const Dirichlet& bc, const solve::SolverO
             }
             const Phase phase("factorize", timings);
             g.solver.factorize(sys.K);
-        } catch (const NotPositiveDefinite& error) {
-            throw NotPositiveDefinite(fmt::format("RsWarp: the Laplacian of component {}: {}",
-                                                  component_name(c0), error.what()));
         } catch (const Error& error) {
-            throw Error(fmt::format("RsWarp: the Laplacian of component {}: {}", component_name(c0),
-                                    error.what()));
+            error.rethrow_with(fmt::format("RsWarp: the Laplacian of component {}: {}",
+                                           component_name(c0), error.what()));
         }
         w.groups.push_back(std::move(g));
     }

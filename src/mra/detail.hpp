@@ -178,7 +178,9 @@ Matrix rigid_modes(int dim, const Matrix& positions, const IndexVector& dofs);
 /// @param[in] rig_coarse      Rig^k, #coarse_dofs by m
 /// @param[in] rig_fine        Rig^{k+1}, #fine_dofs by m
 /// @param[in] fine_positions  per level-(k+1) node, its position in the units of the modes
-/// @return per level-(k+1) node, 1 if its columns were corrected
+/// @return per level-(k+1) node, 1 if its columns were corrected and now meet the conditions
+///         (to 1e-10 relative to the target row); 0 if skipped, or if a column has too few
+///         entries (N^T N singular) to meet them
 std::vector<char> correct_invariance(SparseMatrix& Ct, const StepGeometry& g,
                                      const std::vector<char>& skip_fine, const Matrix& rig_coarse,
                                      const Matrix& rig_fine, const Matrix& fine_positions,

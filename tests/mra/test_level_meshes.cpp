@@ -140,11 +140,12 @@ TEST_P(LevelMeshes, InvarianceCorrectionReproducesRigidMotions) {
     // carried by the measurements Rig^k = C^k Rig^{k+1}. Each column's correction is a
     // least-squares solve of at most 6 unknowns: 1e-10 relative. With the conditions ignored by
     // the construction (the blind treatment) every column is corrected; constrained, those
-    // away from the Dirichlet nodes (Sec. 3.5), for global and localized solves.
+    // away from the Dirichlet nodes (Sec. 3.5), for global and localized solves. At one fine
+    // ring some columns have too few entries to meet the conditions: they are not flagged.
     const test::GridProblem p = problem();
     const double inf = std::numeric_limits<double>::infinity();
     for (const DirichletTreatment t : {DirichletTreatment::Ignore, DirichletTreatment::Constrain})
-        for (const double radius : {inf, 2.0}) {
+        for (const double radius : {inf, 2.0, 1.0}) {
             Options o;
             o.levels = 3;
             o.refinement = refinement();
@@ -183,7 +184,9 @@ TEST_P(LevelMeshes, InvarianceCorrectionReproducesRigidMotions) {
                             << dirichlet_name(t) << " radius " << radius << " level " << k;
                     }
                 // (The coarsest step's supports all reach a Dirichlet node.)
-                if (t == DirichletTreatment::Ignore) {
+                if (radius == 1.0) {
+                    EXPECT_GT(corrected, 0) << dirichlet_name(t) << " level " << k;
+                } else if (t == DirichletTreatment::Ignore) {
                     EXPECT_EQ(corrected, error.rows()) << "radius " << radius << " level " << k;
                 } else if (radius < inf && k + 1 == h.num_levels()) {
                     EXPECT_GT(corrected, 0);

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <cassert>
+#include <exception>
 #include <stdexcept>
 #include <string>
 
@@ -17,30 +18,53 @@ namespace coarsegrain {
 class Error : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
+    /// Throws an error of this one's type with `message`: a caller that adds context to the
+    /// message of an error it catches keeps its type (a NotPositiveDefinite stays one).
+    [[noreturn]] void rethrow_with(const std::string& message) const {
+        std::rethrow_exception(with_message(message));
+    }
+
+protected:
+    /// An error of this one's type with `message` (ErrorOf overrides it).
+    virtual std::exception_ptr with_message(const std::string& message) const {
+        return std::make_exception_ptr(Error(message));
+    }
+};
+
+/// Base of Error's subclasses: gives them rethrow_with (class E : public ErrorOf<E>).
+template <class Derived>
+class ErrorOf : public Error {
+public:
+    using Error::Error;
+
+protected:
+    std::exception_ptr with_message(const std::string& message) const override {
+        return std::make_exception_ptr(Derived(message));
+    }
 };
 
 /// A scene file is invalid; the message names the JSON key.
-class InvalidScene : public Error {
+class InvalidScene : public ErrorOf<InvalidScene> {
 public:
-    using Error::Error;
+    using ErrorOf::ErrorOf;
 };
 
 /// A mesh file could not be read; the message names the file and line.
-class MeshReadError : public Error {
+class MeshReadError : public ErrorOf<MeshReadError> {
 public:
-    using Error::Error;
+    using ErrorOf::ErrorOf;
 };
 
 /// A matrix that must be symmetric positive definite is not (e.g. no Dirichlet condition).
-class NotPositiveDefinite : public Error {
+class NotPositiveDefinite : public ErrorOf<NotPositiveDefinite> {
 public:
-    using Error::Error;
+    using ErrorOf::ErrorOf;
 };
 
 /// A computation stopped because request_interrupt() was called (progress.hpp, Phase).
-class Interrupted : public Error {
+class Interrupted : public ErrorOf<Interrupted> {
 public:
-    using Error::Error;
+    using ErrorOf::ErrorOf;
 };
 
 namespace detail {

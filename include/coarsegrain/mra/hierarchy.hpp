@@ -62,7 +62,9 @@ struct Level {
     /// radius on the fine grid; grown with defect_tolerance); 0 for global solves, cell
     /// localization and nodes without DOFs.
     std::vector<int> region_rings;
-    /// Per node of level k+1: 1 if the invariance correction was applied to its columns of C̃.
+    /// Per node of level k+1: 1 if the invariance correction made its columns of C̃ reproduce
+    /// the rigid motions (to 1e-10); 0 where it was skipped (near a Dirichlet node) or where a
+    /// column has too few entries to meet the conditions (e.g. one fine ring on level meshes).
     std::vector<char> invariance_applied;
     /// Per node of level k: 1 if it lies on a fixed node of the finest grid. The invariance
     /// correction skips the fine nodes whose columns of C̃ reach one of these (Sec. 3.5). All 0

@@ -17,9 +17,9 @@ namespace coarsegrain::sim {
 
 /// Newton's method did not reach its tolerance at the smallest load increment (not a singular
 /// model: that is NotPositiveDefinite).
-class NewtonFailed : public Error {
+class NewtonFailed : public ErrorOf<NewtonFailed> {
   public:
-    using Error::Error;
+    using ErrorOf::ErrorOf;
 };
 
 /// "linear" or "corotational" (scene "kinematics").

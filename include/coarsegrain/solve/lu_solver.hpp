@@ -8,9 +8,9 @@
 namespace coarsegrain::solve {
 
 /// UMFPACK found the matrix singular (numerically).
-class SingularMatrix : public Error {
+class SingularMatrix : public ErrorOf<SingularMatrix> {
   public:
-    using Error::Error;
+    using ErrorOf::ErrorOf;
 };
 
 /// A sparse LU factorization by UMFPACK (SuiteSparse, through Eigen's UmfPackSupport), for

@@ -13,9 +13,9 @@ namespace coarsegrain::solve {
 
 /// An iteration did not converge (conjugate gradients: the matrix may be singular or too
 /// ill-conditioned, or the iteration or time limit was reached).
-class NotConverged : public Error {
+class NotConverged : public ErrorOf<NotConverged> {
   public:
-    using Error::Error;
+    using ErrorOf::ErrorOf;
 };
 
 /// A symmetric positive-definite preconditioner M^{-1} ≈ A^{-1}.
