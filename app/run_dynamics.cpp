@@ -9,6 +9,7 @@
 
 #include "animation.hpp"
 #include "coarsegrain/coarsen/dynamics_run.hpp"
+#include "coarsegrain/coarsen/runtime.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/io/file_util.hpp"
 #include "coarsegrain/io/table.hpp"
@@ -63,14 +64,48 @@ class FailureReport : public coarsen::RunObserver {
     }
 };
 
+/// Each coarse model's own files (CoarseModel::outputs: the level meshes of automatic levels),
+/// written to DIR/<method>/ when the model is built, as `coarsen` writes them to its method
+/// folders; a failed method's folder is removed and its failure printed on stderr.
+class ModelFiles : public FailureReport {
+  public:
+    explicit ModelFiles(fs::path dir) : m_dir(std::move(dir)) {}
+
+    void coarse_built(const std::string& method, const CoarseDynamics& c) override {
+        for (const coarsen::VtuOutput& o : c.model.outputs) {
+            fs::create_directories(m_dir / method);
+            io::write_vtu((m_dir / method / o.file).string(), o.mesh, o.fields);
+            m_files[method].push_back(method + "/" + o.file);
+        }
+    }
+    void method_failed(const std::string& method, const std::string& message) override {
+        std::error_code ec;
+        fs::remove_all(m_dir / method, ec);
+        m_files.erase(method);
+        FailureReport::method_failed(method, message);
+    }
+    /// Lists the method's files in its summary entry as coarse.files (paths relative to DIR).
+    void list_files(const std::string& method, nlohmann::json& entry) const {
+        const auto it = m_files.find(method);
+        if (it != m_files.end()) entry["coarse"]["files"] = it->second;
+    }
+
+  protected:
+    fs::path m_dir;
+
+  private:
+    std::map<std::string, std::vector<std::string>> m_files;
+};
+
 /// A run's files as it goes: each run's animation frames, its ParaView series DIR/<run>/ and
-/// DIR/<run>.pvd (if `series`), each coarse model's export (exports.calculix); a failed method's
-/// files are removed and its failure printed on stderr.
-class FrameWriter : public FailureReport {
+/// DIR/<run>.pvd (if `series`), each coarse model's files (ModelFiles) and export
+/// (exports.calculix); a failed method's files are removed and its failure printed on stderr.
+class FrameWriter : public ModelFiles {
   public:
     FrameWriter(const scene::Scene& sc, const FineDynamics& fine, fs::path dir, bool series,
                 const Exports& exports)
-        : m_sc(sc), m_fine(fine), m_dir(std::move(dir)), m_series(series), m_exports(exports) {}
+        : ModelFiles(std::move(dir)), m_sc(sc), m_fine(fine), m_series(series),
+          m_exports(exports) {}
 
     void fine_stepped(const sim::Trajectory& fine) override {
         const scene::FineModel& fm = m_fine.model;
@@ -93,16 +128,16 @@ class FrameWriter : public FailureReport {
         if (m_series) io::write_pvd((m_dir / (name + ".pvd")).string(), m_runs[name].written);
     }
     void coarse_built(const std::string& method, const CoarseDynamics& c) override {
+        ModelFiles::coarse_built(method, c);
         if (!m_exports.calculix) return;
         fs::create_directories(m_dir / method);
         write_export(m_sc, m_fine.model, c.model, m_dir / method, &c.M);
     }
     void method_failed(const std::string& method, const std::string& message) override {
         std::error_code ec;
-        fs::remove_all(m_dir / method, ec);
         fs::remove(m_dir / (method + ".pvd"), ec);
         m_runs.erase(method);
-        FailureReport::method_failed(method, message);
+        ModelFiles::method_failed(method, message);
     }
 
     /// Writes animation_data.bin of `runs` (in this order) and makes animation.gif from it
@@ -127,7 +162,6 @@ class FrameWriter : public FailureReport {
     };
     const scene::Scene& m_sc;
     const FineDynamics& m_fine;
-    fs::path m_dir;
     bool m_series;
     Exports m_exports;
     AnimationView m_view;
@@ -185,6 +219,7 @@ SimulateRun simulate_files(const scene::Scene& sc, FineDynamics& fine,
         if (r.error.empty()) {
             runs.emplace_back(r.name, &r.probes);
             if (series) r.entry["pvd"] = r.name + ".pvd";
+            writer.list_files(r.name, r.entry);
         }
     io::write_csv(
         trajectory_table(result.fine.times, runs, sc.probes.size(), fine.model.mesh.dim()),
@@ -299,12 +334,14 @@ void print_simulate_table(const scene::Scene& sc, const nlohmann::json& summary,
         "0's mean minus the fine model's, in time units; + is late)\n");
 }
 
-int run_simulate(const scene::Scene& sc, const std::vector<std::string>& methods,
+int run_simulate(const scene::Scene& given, const std::vector<std::string>& methods,
                  const std::string& out_dir, double read_seconds, const Exports& exports) {
-    coarsen::check_dynamics(sc);
-    if (exports.calculix) check_dynamic_export(sc);
-    check_methods(sc, methods);
+    coarsen::check_dynamics(given);
+    if (exports.calculix) check_dynamic_export(given);
+    check_methods(given, methods);
     const OutputFolder folder(out_dir);
+    // Automatic level meshes made once, shared by the hierarchy methods.
+    const scene::Scene sc = coarsen::with_automatic_levels(given, methods);
     Timings timings;
     const scene::FineModel model = build_fine(sc, read_seconds, timings);
     coarsen::check_frames_fit(sc, model);
@@ -341,18 +378,22 @@ nlohmann::json simulate_built(const scene::Scene& sc, const scene::FineModel& fi
     return run.summary;
 }
 
-int run_modes(const scene::Scene& sc, const std::vector<std::string>& methods, int count,
+int run_modes(const scene::Scene& given, const std::vector<std::string>& methods, int count,
               const std::string& out_dir, double read_seconds) {
-    check_methods(sc, methods);
+    check_methods(given, methods);
     const OutputFolder folder(out_dir);
     const fs::path dir(out_dir);
+    // Automatic level meshes made once, shared by the hierarchy methods.
+    const scene::Scene sc = coarsen::with_automatic_levels(given, methods);
     const fem::MassType mass = sc.dynamics ? sc.dynamics->mass : fem::MassType::Consistent;
     Timings timings;
     const scene::FineModel model = build_fine(sc, read_seconds, timings);
     FineDynamics fine = coarsen::fine_dynamics(model, mass, std::move(timings));
     const scene::FineModel& fm = fine.model;
-    FailureReport failures;
-    const coarsen::ModesResult result = coarsen::modes_models(sc, fine, methods, count, failures);
+    ModelFiles files(dir);
+    coarsen::ModesResult result = coarsen::modes_models(sc, fine, methods, count, files);
+    for (coarsen::ModesMethod& r : result.methods)
+        if (r.error.empty()) files.list_files(r.method, r.entry);
     const sim::Modes& fine_modes = result.fine;
     const Index k = fine_modes.eigenvalues.size();
     std::vector<io::VtuFields> mode_fields(static_cast<std::size_t>(k));

@@ -29,6 +29,9 @@ namespace coarsegrain::app {
 /// and the others still run.
 /// With exports.calculix, each method's folder also gets its coarse model for other codes
 /// (write_export: a CalculiX deck with a *DYNAMIC step, or the hierarchy's matrices).
+/// Automatic level meshes (coarse.levels on a simplicial mesh) are made once for all hierarchy
+/// methods (coarsen::with_automatic_levels); each such method writes them to its folder as
+/// level_<k>.vtu, listed in its entry's "coarse.files" (paths relative to DIR).
 /// @return the number of methods that failed
 /// @throws InvalidScene before any work if the scene has no "dynamics" block, or with
 ///         exports.calculix a run no deck states (check_dynamic_export); Error if a method cannot
@@ -82,7 +85,9 @@ void print_simulate_table(const scene::Scene& scene, const nlohmann::json& summa
 /// (scripts/plot_frequencies.py); summary.json with "fine.frequencies_hz", "coarse.frequencies_hz",
 /// "errors.frequency_rel" (per fine mode, against its paired coarse mode) and "mac" (the
 /// pairs' MAC values, "mac_pairs" the coarse mode of each); with several methods, "methods":
-/// one entry per method, named by "method".
+/// one entry per method, named by "method". Automatic level meshes are made once for all
+/// hierarchy methods and written as in run_simulate: DIR/<method>/level_<k>.vtu, listed in the
+/// entry's "coarse.files".
 /// @return the number of methods that failed
 /// @throws Error if a method cannot run on the scene
 int run_modes(const scene::Scene& scene, const std::vector<std::string>& methods, int count,

@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <limits>
 
 #include "cli/cli_test_util.hpp"
@@ -76,6 +78,13 @@ std::string write_coarse_plate(const std::string& dir, const std::string& name, 
 }
 
 json errors_of(const std::string& summary) { return read_json(summary)["errors"]; }
+
+std::string read_text(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
 
 TEST(CliCoarsenAutomaticLevels, WritesLevelsThatGiveTheSameHierarchyBack) {
     const std::string dir = temp_dir("cli_automatic_levels");
@@ -178,3 +187,51 @@ TEST(CliCoarsenAutomaticLevels, TooManyLevelsFailOnlyTheHierarchyInAComparison) 
 }
 
 }  // namespace
+
+// simulate and modes make the automatic levels once for all hierarchy methods and write them to
+// each method's folder, listed in its entry; given back as coarse.level_meshes they step the
+// same coarse model (the VTU holds Float64 positions: the trajectories agree to the solves'
+// round-off, 1e-9 relative).
+TEST(CliSimulateAutomaticLevels, SharesAndWritesTheLevels) {
+    const std::string dir = temp_dir("cli_simulate_automatic_levels");
+    json scene = holed_plate_scene(dir, {{"levels", 3}});
+    scene["dynamics"] = {{"dt", 0.01}, {"steps", 10}, {"output_every", 5}};
+    scene["probes"] = {{0.5, 0.1}};
+    const Result r = cli("simulate " + write_scene(dir, scene) +
+                         " --method mra-linear,mra-dirac --out " + dir + "/sim");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const json s = read_json(dir + "/sim/summary.json");
+    ASSERT_EQ(s["methods"].size(), 2u);
+    for (const json& m : s["methods"]) {
+        const std::string method = m["method"];
+        ASSERT_EQ(m["coarse"]["files"].size(), 2u) << method;
+        for (int k = 1; k <= 2; ++k) {
+            const std::string file = method + "/level_" + std::to_string(k) + ".vtu";
+            EXPECT_EQ(m["coarse"]["files"][k - 1], file);
+            EXPECT_TRUE(std::filesystem::exists(dir + "/sim/" + file)) << file;
+        }
+    }
+    EXPECT_EQ(read_text(dir + "/sim/mra-linear/level_1.vtu"),
+              read_text(dir + "/sim/mra-dirac/level_1.vtu"));
+
+    json given = holed_plate_scene(dir, {{"level_meshes",
+                                          {dir + "/sim/mra-linear/level_1.vtu",
+                                           dir + "/sim/mra-linear/level_2.vtu"}}});
+    given["dynamics"] = scene["dynamics"];
+    given["probes"] = scene["probes"];
+    const Result g = cli("simulate " + write_scene(dir, given, "given.json") +
+                         " --method mra-linear --out " + dir + "/given");
+    ASSERT_EQ(g.code, 0) << g.output;
+    const json gs = read_json(dir + "/given/summary.json");
+    EXPECT_FALSE(gs["coarse"].contains("files"));  // given levels are not written again
+    const double a = s["methods"][0]["errors"]["trajectory_l2_rel"].get<double>(),
+                 b = gs["errors"]["trajectory_l2_rel"].get<double>();
+    EXPECT_NEAR(b, a, 1e-9 * a);
+
+    const Result m = cli("modes " + write_scene(dir, scene) +
+                         " --method mra-linear --count 2 --out " + dir + "/modes");
+    ASSERT_EQ(m.code, 0) << m.output;
+    const json ms = read_json(dir + "/modes/summary.json");
+    ASSERT_EQ(ms["coarse"]["files"].size(), 2u);
+    EXPECT_TRUE(std::filesystem::exists(dir + "/modes/mra-linear/level_2.vtu"));
+}
