@@ -21,7 +21,7 @@ ATOL_DIMENSIONLESS = 1e-12
 # Keys whose values are wall times or machine figures (compared by their keys only) and the keys
 # of the tool's files, which the module does not write.
 VOLATILE = {"timings", "speedup", "step_seconds", "peak_memory_mb"}
-FILE_KEYS = {"plots", "animation_frames", "pvd"}
+FILE_KEYS = {"plots", "animation_frames", "pvd", "files"}
 
 
 def dynamic_demo(**changes):
