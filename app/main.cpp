@@ -143,7 +143,8 @@ int main(int argc, char** argv) {
         "(lumped|consistent|galerkin) chooses the effective tensors' and baselines' coarse mass.\n"
         "Files: fine.pvd (+ fine/), <method>.pvd (+ <method>/) for ParaView, trajectory.csv,\n"
         "trajectory.png, animation.gif (every model side by side; its data animation_data.bin),\n"
-        "summary.json. See docs/guide.md, \"Dynamics\".");
+        "summary.json; an mra method on automatic levels also <method>/level_<k>.vtu.\n"
+        "See docs/guide.md, \"Dynamics\".");
     CLI::App* modes = app.add_subcommand(
         "modes", "natural frequencies and modes, fine and coarse, paired by MAC");
     modes->add_option("scene", modes_scene, "scene file (JSON)")->required();
@@ -158,7 +159,8 @@ int main(int argc, char** argv) {
     modes->add_option("--out", modes_out, "output folder")->capture_default_str();
     modes->footer(
         "Files: mode_NN.vtu (fine mode \"mode\" and each method's paired mode), frequencies.csv,\n"
-        "frequencies.png, summary.json. See docs/guide.md, \"Dynamics\".");
+        "frequencies.png, summary.json; an mra method on automatic levels also\n"
+        "<method>/level_<k>.vtu. See docs/guide.md, \"Dynamics\".");
     CLI::App* demo = app.add_subcommand(
         "demo",
         "the built-in scene, a layered beam (stiff/soft, contrast 1000) hung under gravity: fine\n"
