@@ -329,15 +329,23 @@ std::vector<std::string> split(const std::string& s) {
     return parts;
 }
 
+/// mra-pcg's options from the --levels, --radius and --degree values.
+/// @throws Error naming the option out of range (mra::validate)
+mra::PreconditionerOptions mra_options_of(const std::string& levels, const std::string& radius,
+                                          const std::string& degree) {
+    mra::PreconditionerOptions o;
+    o.levels = std::stoi(levels);
+    o.radius = std::stod(radius);
+    o.smoother_degree = std::stoi(degree);
+    mra::validate(o);
+    return o;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     if (argc == 9 && std::string(argv[1]) == "--one") {
-        mra::PreconditionerOptions mra_options;
-        mra_options.levels = std::atoi(argv[6]);
-        mra_options.radius = std::atof(argv[7]);
-        mra_options.smoother_degree = std::atoi(argv[8]);
-        mra::validate(mra_options);
+        const mra::PreconditionerOptions mra_options = mra_options_of(argv[6], argv[7], argv[8]);
         if (std::string(argv[2]) != "amg")
             return run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]),
                                   mra_options);
@@ -374,6 +382,16 @@ int main(int argc, char** argv) {
             fmt::print(stderr, "unknown option {}\n", key);
             return 2;
         }
+    }
+    try {  // bad values fail here, before any run
+        mra_options_of(levels, radius, degree);
+    } catch (const std::logic_error&) {  // std::stoi, std::stod
+        fmt::print(stderr, "--levels {} --radius {} --degree {}: expected numbers\n", levels,
+                   radius, degree);
+        return 2;
+    } catch (const Error& e) {
+        fmt::print(stderr, "{}\n", e.what());
+        return 2;
     }
     std::vector<std::string> rows = {
         "| cube | field | contrast | DOFs | backend | set-up s | solve s | total s | 2nd rhs s | "
