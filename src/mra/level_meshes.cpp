@@ -401,9 +401,16 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
     // Kept coarse DOFs and their pivot DOFs (indices into fine_dofs).
     RefinementOperators ops;
     std::vector<Index> kept, dropped, pivot, coarse_local(static_cast<std::size_t>(dim * nc), -1);
+    // A row that vanishes on the present DOFs (its hat function reaches only fixed fine nodes)
+    // measures nothing: it is dropped whatever its pivot.
+    const auto measures = [&](Index i, int d) {
+        for (RowMajor::InnerIterator it(rows, i); it; ++it)
+            if (fine_local[dim * it.col() + d] >= 0) return true;
+        return false;
+    };
     for (Index i = 0; i < nc; ++i)
         for (int d = 0; d < dim; ++d) {
-            Index p = own_pivot(i, d);
+            Index p = measures(i, d) ? own_pivot(i, d) : -1;
             double best = 0;
             for (RowMajor::InnerIterator it(rows, i); p < 0 && keep_boundary_rows && it; ++it) {
                 const Index l = fine_local[dim * it.col() + d];

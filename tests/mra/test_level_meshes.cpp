@@ -2,6 +2,7 @@
 // the canonical operators' identities, the nested and grid oracles, and Algorithm 1's exactness.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <tuple>
 
 #include "../test_util.hpp"
@@ -101,6 +102,70 @@ TEST_P(LevelMeshes, LeftInverseAndKernelHoldToRoundOff) {
                 EXPECT_GT(ops.C_dagger.nonZeros(), ops.C.rows());
             }
         }
+}
+
+// A coarse node whose hat function reaches only absent (fixed) fine nodes measures nothing and
+// is dropped, even with its pivot present: a pivot is the nearest free fine node, which can lie
+// outside the node's hat function (automatic levels with a clamped slab of the object). Here
+// the pivot of one coarse node is moved to a fine neighbour of its hat function's support and
+// that support is fixed; the other coarse DOFs are kept and C^† and W stay exact.
+TEST(LevelMeshOperators, ANodeMeasuringOnlyFixedNodesIsDropped) {
+    for (const int dim : {2, 3}) {
+        const std::vector<mesh::Mesh> levels = non_nested_levels(dim);
+        const mesh::Mesh &coarse = levels[1], &fine = levels[2];
+        std::vector<Index> pivots = pivot_nodes(coarse.rest_positions, fine.rest_positions);
+        const SparseMatrix C_node = linear_refinement(coarse, fine.rest_positions);
+        using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
+        const RowMajor rows = C_node;
+        // The interior coarse node with the smallest support, and a fine node beside it that
+        // is no pivot.
+        Index node = -1;
+        for (Index i = 0; i < coarse.num_nodes(); ++i)
+            if (rows.row(i).nonZeros() > 1 && (node < 0 || rows.row(i).nonZeros() <
+                                                               rows.row(node).nonZeros()))
+                node = i;
+        std::vector<char> support(static_cast<std::size_t>(fine.num_nodes()), 0),
+            is_pivot(support.size(), 0);
+        for (RowMajor::InnerIterator it(rows, node); it; ++it) support[it.col()] = 1;
+        for (const Index q : pivots) is_pivot[q] = 1;
+        Index beside = -1;
+        for (Index e = 0; e < fine.num_elements() && beside < 0; ++e) {
+            bool touches = false;
+            for (Index a = 0; a < fine.elements.cols(); ++a) touches |= support[fine.elements(e, a)];
+            for (Index a = 0; a < fine.elements.cols() && touches && beside < 0; ++a) {
+                const Index v = fine.elements(e, a);
+                if (!support[v] && !is_pivot[v]) beside = v;
+            }
+        }
+        ASSERT_GE(beside, 0);
+        pivots[node] = beside;
+        std::vector<Index> present;
+        for (Index d = 0; d < fine.num_dofs(); ++d)
+            if (!support[d / dim]) present.push_back(d);
+        const IndexVector dofs = Eigen::Map<IndexVector>(present.data(),
+                                                         static_cast<Index>(present.size()));
+        for (const bool keep : {false, true}) {
+            const RefinementOperators ops =
+                local_refinement_operators(C_node, pivots, fine.elements, dim, dofs, keep);
+            // Dropped: the node's DOFs, and those of nodes whose pivot was fixed with it (all of
+            // them without boundary rows).
+            std::vector<Index> expected;
+            for (Index i = 0; i < coarse.num_nodes(); ++i)
+                if (i == node || (!keep && support[pivots[i]]))
+                    for (int d = 0; d < dim; ++d) expected.push_back(dim * i + d);
+            const std::vector<Index> dropped(ops.dropped_dofs.begin(), ops.dropped_dofs.end());
+            if (keep) {
+                for (const Index d : expected)
+                    EXPECT_TRUE(std::binary_search(dropped.begin(), dropped.end(), d)) << d;
+            } else {
+                EXPECT_EQ(dropped, expected);
+            }
+            // As LeftInverseAndKernelHoldToRoundOff.
+            const Matrix CCd = Matrix(ops.C * SparseMatrix(ops.C_dagger.transpose()));
+            EXPECT_LT(test::max_abs(CCd - Matrix::Identity(CCd.rows(), CCd.cols())), 1e-12);
+            EXPECT_LT(test::max_abs(Matrix(ops.C * SparseMatrix(ops.W.transpose()))), 1e-12);
+        }
+    }
 }
 
 TEST_P(LevelMeshes, AdaptedRefinementSatisfiesEq9AndEq12) {

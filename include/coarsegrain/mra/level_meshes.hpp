@@ -45,8 +45,11 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 /// C^k, a left inverse C^{k,†} and the kernel W^k on the present DOFs for any scalar refinement
 /// C_node with pivots (linear_refinement or selection_refinement with pivot_nodes).
 ///
-/// A coarse DOF (i, d) whose pivot DOF (d of node pivots[i]) is present (fine_dofs) is kept with
-/// it as its pivot p. One whose pivot DOF is absent (a Dirichlet DOF eliminated at the finest
+/// A coarse DOF (i, d) whose row vanishes on the present DOFs (fine_dofs) measures nothing and is
+/// dropped: its hat function reaches only absent fine nodes, while its pivot, the nearest fine
+/// node, can lie outside it and be present (automatic levels beside a clamped part of the
+/// object). Else one whose pivot DOF (d of node pivots[i]) is present is kept with it as its
+/// pivot p, and one whose pivot DOF is absent (a Dirichlet DOF eliminated at the finest
 /// level, or a DOF dropped at a finer level) is, as in refinement_operators,
 /// - dropped if keep_boundary_rows is false (elimination);
 /// - kept if keep_boundary_rows is true and its row has an exclusive pivot: a present DOF of a
