@@ -721,6 +721,13 @@ Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& coarser_levels,
     return build(fine_mesh, &coarser_levels, &K, nullptr, fixed_dofs, options, nullptr);
 }
 
+Hierarchy build_hierarchy_free(const std::vector<mesh::Mesh>& coarser_levels,
+                               const mesh::Mesh& fine_mesh, const SparseMatrix& A_free,
+                               const std::vector<Index>& fixed_dofs, const Options& options) {
+    CG_VERIFY(!coarser_levels.empty(), "mra: no coarser level meshes");
+    return build(fine_mesh, &coarser_levels, nullptr, &A_free, fixed_dofs, options, nullptr);
+}
+
 SparseMatrix basis(const Hierarchy& h, int k) {
     const int q = h.num_levels();
     CG_VERIFY(k >= 1 && k <= q, "mra: level {} out of range 1..{}", k, q);

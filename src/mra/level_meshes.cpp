@@ -160,6 +160,7 @@ class LeftInverseRow {
     /// Smallest reciprocal condition number (singular values) of a cell's system.
     static constexpr double kMinCellRcond = 1e-3;
 
+    /// Empty if the row has no local left inverse.
     std::vector<std::pair<Index, double>> operator()(Index i, int d, Index pivot) const {
         std::vector<std::pair<Index, double>> out = cell_row(i, d);
         return out.empty() ? ring_row(i, d, pivot) : out;
@@ -224,7 +225,7 @@ class LeftInverseRow {
     }
 
     /// The row as the smallest change of the injection at the pivot on the fewest rings around
-    /// it that admit an exact solution.
+    /// it that admit an exact solution; empty if none within kMaxRings.
     std::vector<std::pair<Index, double>> ring_row(Index i, int d, Index pivot) const {
         std::vector<Index> S{pivot}, ring{pivot};  // fine nodes: the region and its last ring
         for (int rings = 0;; ++rings) {
@@ -270,11 +271,7 @@ class LeftInverseRow {
                 }
             std::sort(next.begin(), next.end());
             next.erase(std::unique(next.begin(), next.end()), next.end());
-            CG_VERIFY(rings < kMaxRings && !next.empty(),
-                      "mra: no local left inverse of the refinement for node {} (component {}) "
-                      "of the coarser level within {} rings of its pivot: the level meshes are "
-                      "too different near it",
-                      i, d, rings);
+            if (rings >= kMaxRings || next.empty()) return {};
             S.insert(S.end(), next.begin(), next.end());
             ring = std::move(next);
         }
@@ -289,6 +286,64 @@ class LeftInverseRow {
     const std::vector<Index>& m_coarse;
     int m_dim;
 };
+
+/// Kernel pivots: one of its candidate DOFs per row, distinct (candidates[r]: (-|C^†(r, j)
+/// C(r, j)|, j), sorted, products below 1e-10 of the row's largest left out). Each row takes its
+/// free DOF of largest product, rows served in the order of their largest product, which makes
+/// C^†[:, P] C[:, P]^T diagonally dominant where the rows are near injections and gives P = the
+/// pivots on nested meshes. A row whose candidates are all taken gets one by the shortest
+/// augmenting path (breadth-first): the rows along it move to other candidates of theirs.
+/// Returns each row's pivot DOF, -1 where none was found.
+std::vector<Index> kernel_pivots(const std::vector<std::vector<std::pair<double, Index>>>& candidates,
+                                 Index nf) {
+    const Index nk = static_cast<Index>(candidates.size());
+    const auto usable = [&](Index r, const std::pair<double, Index>& c) {
+        return c.first < 1e-10 * candidates[static_cast<std::size_t>(r)][0].first;
+    };
+    std::vector<Index> order(static_cast<std::size_t>(nk));
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
+        const double sa = candidates[a].empty() ? 0 : candidates[a][0].first;
+        const double sb = candidates[b].empty() ? 0 : candidates[b][0].first;
+        return sa < sb;
+    });
+    std::vector<Index> owner(static_cast<std::size_t>(nf), -1), owned(static_cast<std::size_t>(nk), -1);
+    const auto take = [&](Index r, Index j) {
+        owner[j] = r;
+        owned[r] = j;
+    };
+    for (const Index r : order) {
+        for (const auto& c : candidates[r])
+            if (usable(r, c) && owner[c.second] < 0) {
+                take(r, c.second);
+                break;
+            }
+        if (owned[r] >= 0 || candidates[r].empty()) continue;
+        // Breadth-first over rows: from a row to the owners of its usable candidates, until a
+        // free candidate ends the path.
+        std::map<Index, Index> reached_from;  // DOF -> the row whose candidate it is
+        std::vector<Index> queue{r};
+        for (std::size_t next = 0; next < queue.size() && owned[r] < 0; ++next) {
+            const Index x = queue[next];
+            for (const auto& c : candidates[x]) {
+                if (!usable(x, c) || !reached_from.emplace(c.second, x).second) continue;
+                if (owner[c.second] >= 0) {
+                    queue.push_back(owner[c.second]);
+                    continue;
+                }
+                for (Index j = c.second, row = x;;) {  // shift the pivots along the path
+                    const Index previous = owned[row];
+                    take(row, j);
+                    if (row == r) break;
+                    j = previous;
+                    row = reached_from.at(previous);
+                }
+                break;
+            }
+        }
+    }
+    return owned;
+}
 
 }  // namespace
 
@@ -428,8 +483,65 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
             kept.push_back(dim * i + d);
             pivot.push_back(p);
         }
-    const Index nk = static_cast<Index>(kept.size());
     const Index nf = static_cast<Index>(fine_dofs.size());
+    const NodeGraph graph(fine_elements, C_node.cols());
+    const LeftInverseRow left_inverse(C_node, rows, graph, fine_local, coarse_local, dim);
+    const auto dagger_row = [&](std::size_t r) {
+        return left_inverse(kept[r] / dim, static_cast<int>(kept[r] % dim),
+                            fine_dofs[pivot[r]] / dim);
+    };
+    std::vector<std::vector<std::pair<Index, double>>> dagger(kept.size());
+#pragma omp parallel for schedule(dynamic, 64) if (kept.size() >= 4096)
+    for (std::size_t r = 0; r < kept.size(); ++r) dagger[r] = dagger_row(r);
+    // A row without a local left inverse depends, near its pivot, on the other rows (two coarse
+    // nodes whose hat functions reach the same single fine node, or levels too different there):
+    // such rows are dropped one at a time, the weakest (smallest norm on the present DOFs) first,
+    // and the others without one solved again. The rows solved with a dropped row's constraint
+    // stay left-inverse rows of the remaining ones.
+    const auto weight = [&](std::size_t r) {
+        double w = 0;
+        for (RowMajor::InnerIterator it(rows, kept[r] / dim); it; ++it)
+            if (fine_local[dim * it.col() + kept[r] % dim] >= 0) w += it.value() * it.value();
+        return w;
+    };
+    std::vector<std::size_t> unsolved;
+    for (std::size_t r = 0; r < kept.size(); ++r)
+        if (dagger[r].empty()) unsolved.push_back(r);
+    std::vector<char> drop(kept.size(), 0);
+    while (!unsolved.empty()) {
+        const auto weakest = std::min_element(
+            unsolved.begin(), unsolved.end(),
+            [&](std::size_t a, std::size_t b) { return weight(a) < weight(b); });
+        drop[*weakest] = 1;
+        coarse_local[static_cast<std::size_t>(kept[*weakest])] = -1;
+        unsolved.erase(weakest);
+        std::vector<std::size_t> still;
+        for (const std::size_t r : unsolved)
+            if ((dagger[r] = dagger_row(r)).empty()) still.push_back(r);
+        unsolved = std::move(still);
+    }
+    {
+        std::size_t n = 0;
+        for (std::size_t r = 0; r < kept.size(); ++r) {
+            if (drop[r]) {
+                dropped.push_back(kept[r]);
+                continue;
+            }
+            if (n != r) {
+                kept[n] = kept[r];
+                pivot[n] = pivot[r];
+                dagger[n] = std::move(dagger[r]);
+            }
+            coarse_local[static_cast<std::size_t>(kept[n])] = static_cast<Index>(n);
+            ++n;
+        }
+        kept.resize(n);
+        pivot.resize(n);
+        dagger.resize(n);
+        std::sort(dropped.begin(), dropped.end());
+    }
+    const Index nk = static_cast<Index>(kept.size());
+    CG_VERIFY(nk > 0, "mra: no DOF of the coarser level has a local left inverse of the refinement");
     ops.coarse_dofs = Eigen::Map<const IndexVector>(kept.data(), nk);
     ops.dropped_dofs =
         Eigen::Map<const IndexVector>(dropped.data(), static_cast<Index>(dropped.size()));
@@ -445,27 +557,6 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
     }
     ops.C.resize(nk, nf);
     ops.C.setFromTriplets(t.begin(), t.end());
-
-    const NodeGraph graph(fine_elements, C_node.cols());
-    const LeftInverseRow left_inverse(C_node, rows, graph, fine_local, coarse_local, dim);
-    std::vector<std::vector<std::pair<Index, double>>> dagger(static_cast<std::size_t>(nk));
-    // An exception must not leave the parallel loop: the error of the first row that has one is
-    // raised after it.
-    Index failed = nk;
-    std::string failure;
-#pragma omp parallel for schedule(dynamic, 64) if (nk >= 4096)
-    for (Index r = 0; r < nk; ++r) {
-        try {
-            dagger[r] = left_inverse(kept[r] / dim, kept[r] % dim, fine_dofs[pivot[r]] / dim);
-        } catch (const Error& e) {
-#pragma omp critical(local_refinement_failure)
-            if (r < failed) {
-                failed = r;
-                failure = e.what();
-            }
-        }
-    }
-    CG_VERIFY(failed == nk, "{}", failure);
     t.clear();
     for (Index r = 0; r < nk; ++r)
         for (const auto& [l, v] : dagger[r]) t.emplace_back(r, l, v);
@@ -474,9 +565,7 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
 
     // W = S_N (I - C^T C^†) on the fine DOFs N outside a set P of one DOF per row (the kernel
     // pivots). W[:, N] = I - C[:, N]^T C^†[:, N] is invertible exactly when C^†[:, P] C[:, P]^T
-    // is (C^† C^T = I): each row r takes the free DOF j of largest |C^†(r, j) C(r, j)|, rows
-    // served in the order of their largest product, which makes that matrix diagonally dominant
-    // where the rows are near injections and gives P = the pivots on nested meshes.
+    // is (C^† C^T = I): kernel_pivots.
     std::vector<std::vector<std::pair<double, Index>>> candidates(static_cast<std::size_t>(nk));
     {
         const RowMajor C_rows = ops.C;
@@ -491,27 +580,19 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
             std::sort(candidates[r].begin(), candidates[r].end());
         }
     }
-    std::vector<Index> order(static_cast<std::size_t>(nk));
-    std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
-        const double sa = candidates[a].empty() ? 0 : candidates[a][0].first;
-        const double sb = candidates[b].empty() ? 0 : candidates[b][0].first;
-        return sa < sb;
-    });
-    std::vector<char> pivot_dof(static_cast<std::size_t>(nf), 0);
-    for (const Index r : order) {
-        const auto free = std::find_if(candidates[r].begin(), candidates[r].end(),
-                                       [&](const auto& c) { return !pivot_dof[c.second]; });
-        CG_VERIFY(free != candidates[r].end() && free->first < 0,
+    const std::vector<Index> kernel_pivot = kernel_pivots(candidates, nf);
+    std::vector<char> is_kernel_pivot(static_cast<std::size_t>(nf), 0);
+    for (Index r = 0; r < nk; ++r) {
+        CG_VERIFY(kernel_pivot[r] >= 0,
                   "mra: no kernel pivot for DOF {} of the coarser level: the level meshes are too "
                   "different near it",
                   kept[r]);
-        pivot_dof[free->second] = 1;
+        is_kernel_pivot[kernel_pivot[r]] = 1;
     }
     t.clear();
     Index wavelets = 0;
     for (Index l = 0; l < nf; ++l)
-        if (!pivot_dof[l]) t.emplace_back(wavelets++, l, 1.0);
+        if (!is_kernel_pivot[l]) t.emplace_back(wavelets++, l, 1.0);
     SparseMatrix S_N(wavelets, nf);
     S_N.setFromTriplets(t.begin(), t.end());
     const SparseMatrix SCt = S_N * SparseMatrix(ops.C.transpose());

@@ -7,6 +7,7 @@
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/progress.hpp"
+#include "coarsegrain/mra/automatic_levels.hpp"
 
 namespace coarsegrain::mra {
 
@@ -84,6 +85,34 @@ int preconditioner_levels(const Eigen::Vector3i& cells, int dim,
         coarse.head(dim) /= 2;
         ++q;
     }
+    return q;
+}
+
+int preconditioner_levels(const mesh::Mesh& fine, const PreconditionerOptions& options) {
+    if (fine.grid) return preconditioner_levels(fine.grid->cells, fine.dim(), options);
+    validate(options);
+    CG_VERIFY(fine.type == mesh::ElementType::Tri3 || fine.type == mesh::ElementType::Tet4,
+              "solver (mra-pcg): the fine mesh must be a regular grid or of linear triangles or "
+              "tetrahedra, got {} elements",
+              mesh::element_name(fine.type));
+    const int most = max_automatic_levels(fine);
+    const int dim = fine.dim();
+    if (options.levels > 0) {
+        CG_VERIFY(options.levels <= most,
+                  "solver.levels = {}: the automatic level meshes of a fine mesh of {} nodes allow "
+                  "at most {} levels",
+                  options.levels, fine.num_nodes(), most);
+        return options.levels;
+    }
+    int q = 2;
+    const auto coarsest_dofs = [&](int levels) {
+        return dim * std::ldexp(static_cast<double>(fine.num_nodes()), -dim * (levels - 1));
+    };
+    while (q < most && coarsest_dofs(q) > static_cast<double>(options.coarsest_dofs)) ++q;
+    CG_VERIFY(q <= most,
+              "solver (mra-pcg): a fine mesh of {} nodes is too small for a coarser level; use "
+              "cholmod",
+              fine.num_nodes());
     return q;
 }
 
@@ -177,25 +206,31 @@ Vector MultigridPreconditioner::apply(const Vector& r) const {
     return cycle(m_levels.size() - 1, r);
 }
 
-solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& grid,
+solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& fine,
                                                       std::vector<Index> fixed_dofs,
                                                       const PreconditionerOptions& options) {
-    CG_VERIFY(grid.grid.has_value(),
-              "solver (mra-pcg): the fine mesh must be a regular grid (a \"grid\" mesh block)");
     Options o;
-    o.levels = preconditioner_levels(grid.grid->cells, grid.dim(), options);
+    o.levels = preconditioner_levels(fine, options);
     o.radius = {options.radius};
     o.dirichlet = DirichletTreatment::Eliminate;
     o.store_wavelet_stiffness = false;
-    auto mesh = std::make_shared<const mesh::Mesh>(grid);
+    auto mesh = std::make_shared<const mesh::Mesh>(fine);
     auto fixed = std::make_shared<const std::vector<Index>>(std::move(fixed_dofs));
     const int degree = options.smoother_degree;
     return
         [mesh, fixed, o, degree](const SparseMatrix& A) -> std::unique_ptr<solve::Preconditioner> {
             Hierarchy h;
-            {
+            if (mesh->grid) {
                 const Phase phase("mra-pcg: hierarchy");
                 h = build_hierarchy_free(*mesh, A, *fixed, o);
+            } else {
+                std::vector<mesh::Mesh> levels;
+                {
+                    const Phase phase("mra-pcg: levels");
+                    levels = automatic_level_meshes(*mesh, o.levels);
+                }
+                const Phase phase("mra-pcg: hierarchy");
+                h = build_hierarchy_free(levels, *mesh, A, *fixed, o);
             }
             const Phase phase("mra-pcg: cycle");
             return std::make_unique<MultigridPreconditioner>(std::move(h), A, degree);

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <exception>
@@ -491,21 +492,25 @@ SparseMatrix from_region_solutions(std::vector<RegionSolution>& solutions, Index
 
 /// Runs solve(n, scratch) for every region n in [0, count) on all OpenMP threads (dynamic
 /// schedule: regions differ in size), each thread with its own RegionScratch for nw wavelets.
-/// The first exception thrown is rethrown after the loop.
+/// The first exception thrown is rethrown after the loop; no region starts after it, as the
+/// throwing thread's scratch is left mid-region (its wavelet indices not reset).
 template <class F>
 void for_each_region(Index count, Index nw, F&& solve) {
     std::exception_ptr error;
+    std::atomic<bool> failed = false;
     std::mutex mutex;
 #pragma omp parallel if (count >= kMinParallelNodes)
     {
         RegionScratch scratch(nw);
 #pragma omp for schedule(dynamic, 1)
         for (Index n = 0; n < count; ++n) {
+            if (failed.load(std::memory_order_relaxed)) continue;
             try {
                 solve(n, scratch);
             } catch (...) {
                 const std::lock_guard<std::mutex> lock(mutex);
                 if (!error) error = std::current_exception();
+                failed = true;
             }
         }
     }

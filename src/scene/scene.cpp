@@ -387,17 +387,15 @@ void parse_solver(const JsonReader& sv, Scene& s) {
         s.preconditioner.smoother_degree = static_cast<int>(v->integer(1, 10));
 }
 
-/// mra-pcg solves the linear fine model of a grid whose cells halve: checked before any work.
+/// mra-pcg solves the linear fine model of a grid whose cells halve, or of linear triangles or
+/// tetrahedra with enough nodes for a coarser automatic level: checked before any work.
 void check_mra_pcg(const Scene& s, const JsonReader& sv) {
     const JsonReader backend = sv.at("backend");
-    backend.fail_unless(s.mesh.grid.has_value(),
-                        "mra-pcg needs a fine mesh that is a regular grid (a \"grid\" mesh "
-                        "block); this mesh is not one");
     backend.fail_unless(s.kinematics == sim::Kinematics::Linear,
                         "mra-pcg solves linear fine models; corotated kinematics factorize their "
                         "tangents (use cholmod)");
     try {
-        mra::preconditioner_levels(s.mesh.grid->cells, s.mesh.dim(), s.preconditioner);
+        mra::preconditioner_levels(s.mesh, s.preconditioner);
     } catch (const Error& e) {
         (sv.has("levels") ? sv.at("levels") : backend).fail("{}", e.what());
     }

@@ -153,12 +153,19 @@ Hierarchy build_hierarchy_free(const mesh::Mesh& mesh, const SparseMatrix& A_fre
 /// @param[in] fine_mesh       level q: any element type (only its nodes are used)
 /// @param[in] K, fixed_dofs   as build_hierarchy on a grid, over the fine mesh's DOFs
 /// @param[in] options         levels = coarser_levels.size() + 1; validate_level_mesh_options
-/// @throws Error if the meshes or options do not meet the above, a local left inverse does not
-///         exist (local_refinement_operators), or a wavelet stiffness B^k is not positive
-///         definite
+/// @throws Error if the meshes or options do not meet the above, local_refinement_operators
+///         fails, or a wavelet stiffness B^k is not positive definite
 Hierarchy build_hierarchy(const std::vector<mesh::Mesh>& coarser_levels,
                           const mesh::Mesh& fine_mesh, const SparseMatrix& K,
                           const std::vector<Index>& fixed_dofs, const Options& options);
+
+/// build_hierarchy on level meshes with the fine operator already restricted to the DOFs free of
+/// the Dirichlet conditions, as build_hierarchy_free on a grid (read in place, A_fine left
+/// empty; the Eliminate and Constrain treatments).
+/// @throws Error as build_hierarchy on level meshes, or if A_free is not #free DOFs square
+Hierarchy build_hierarchy_free(const std::vector<mesh::Mesh>& coarser_levels,
+                               const mesh::Mesh& fine_mesh, const SparseMatrix& A_free,
+                               const std::vector<Index>& fixed_dofs, const Options& options);
 
 /// The checks build_hierarchy makes on the options of a hierarchy on level meshes: those of
 /// validate(options); localized solves (finite radius) node-wise with patch 1; canonical

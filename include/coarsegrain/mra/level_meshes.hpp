@@ -70,6 +70,10 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 ///   the fine nodes within the fewest rings of p in the finer level's mesh graph (nodes sharing
 ///   an element) for which that has an exact solution (up to 8 rings), a small dense least-norm
 ///   problem (complete orthogonal decomposition) on the rows of C touching S_r.
+/// A kept row with neither depends, near its pivot, on the other kept rows (two coarse nodes
+/// whose hat functions reach the same single fine node, or levels too different there): such
+/// rows are dropped one at a time, the weakest (smallest norm on the present DOFs) first, and
+/// the others without a row of C^† solved again; the dropped DOFs join dropped_dofs.
 ///
 /// The kernel is W = S_N (I - C^T C^†), S_N selecting the present fine DOFs outside a set P of one
 /// kernel pivot per kept row (ascending): C W^T = C - C C^{†,T} C = 0, and W has full row rank
@@ -85,7 +89,8 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 /// @param[in] dim        2 or 3
 /// @param[in] fine_dofs  present fine DOFs, sorted, in [0, dim * C_node.cols())
 /// @param[in] keep_boundary_rows  see above
-/// @throws Error if the sizes disagree, pivots repeat, or a row of C^† has no exact solution
+/// @throws Error if the sizes disagree, pivots repeat, no row is left, or no kernel pivot is
+///         found
 RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
                                                const std::vector<Index>& pivots,
                                                const IndexMatrix& fine_elements, int dim,

@@ -24,6 +24,15 @@ namespace coarsegrain::mra {
 int preconditioner_levels(const Eigen::Vector3i& cells, int dim,
                           const PreconditionerOptions& options);
 
+/// The levels the preconditioner uses on a fine mesh: on a grid, preconditioner_levels of its
+/// cells; on triangles or tetrahedra (automatic level meshes, automatic_levels.hpp) with N
+/// nodes in dimension d, options.levels if set, else the fewest q >= 2 whose coarsest level is
+/// expected to have at most options.coarsest_dofs DOFs (d N / 2^{d(q-1)}), at most
+/// max_automatic_levels(fine).
+/// @throws Error if the mesh is neither a grid nor simplicial, or as the grid version, or if
+///         options.levels is set above max_automatic_levels(fine)
+int preconditioner_levels(const mesh::Mesh& fine, const PreconditionerOptions& options);
+
 /// One V-cycle over a hierarchy as a preconditioner, M^{-1} r = V(q, r) with
 /// V(1, b) = A^{1,-1} b and, for k > 1, x = S_k b, x += C̃^{k-1,T} V(k-1, C̃^{k-1} (b - A^k x)),
 /// x += S_k (b - A^k x): S_k the Chebyshev polynomial of degree d in D_k^{-1} A^k on
@@ -60,16 +69,19 @@ class MultigridPreconditioner : public solve::Preconditioner {
     int m_degree;
 };
 
-/// The factory of mra-pcg's preconditioner for the fine model of a grid scene: given the
-/// stiffness (or a step operator) restricted to the free DOFs (all DOFs of `grid` but
-/// `fixed_dofs`, in order, as fem::reduce makes it), builds the hierarchy on it (linear
-/// refinement, node localization at options.radius, Dirichlet DOFs eliminated, truncation 1e-7,
-/// invariance correction; B^k dropped once used, Options::store_wavelet_stiffness) and the
-/// V-cycle. Phases "mra-pcg: hierarchy" and "mra-pcg: cycle".
-/// @param grid        the fine mesh, a grid (mesh::make_grid); copied
+/// The factory of mra-pcg's preconditioner for the fine model of a scene: given the stiffness
+/// (or a step operator) restricted to the free DOFs (all DOFs of `fine` but `fixed_dofs`, in
+/// order, as fem::reduce makes it), builds the hierarchy on it (linear refinement, node
+/// localization at options.radius, Dirichlet DOFs eliminated, truncation 1e-7, invariance
+/// correction; B^k dropped once used, Options::store_wavelet_stiffness) and the V-cycle. On a
+/// grid the levels are its nested grids; on triangles or tetrahedra they are the automatic
+/// level meshes (made at each call, phase "mra-pcg: levels"), the localized regions rings of
+/// the finer level's node graph. Phases "mra-pcg: hierarchy" and "mra-pcg: cycle".
+/// @param fine        the fine mesh, a grid (mesh::make_grid) or simplicial; copied
 /// @param fixed_dofs  the Dirichlet DOFs, sorted
-/// @throws Error (when called) if the matrix is not #free DOFs square, or as build_hierarchy
-solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& grid,
+/// @throws Error if preconditioner_levels does; (when called) if the matrix is not #free DOFs
+///         square, or as automatic_level_meshes and build_hierarchy
+solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& fine,
                                                       std::vector<Index> fixed_dofs,
                                                       const PreconditionerOptions& options);
 
