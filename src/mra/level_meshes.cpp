@@ -294,8 +294,8 @@ class LeftInverseRow {
 /// pivots on nested meshes. A row whose candidates are all taken gets one by the shortest
 /// augmenting path (breadth-first): the rows along it move to other candidates of theirs.
 /// Returns each row's pivot DOF, -1 where none was found.
-std::vector<Index> kernel_pivots(const std::vector<std::vector<std::pair<double, Index>>>& candidates,
-                                 Index nf) {
+std::vector<Index> kernel_pivots(
+    const std::vector<std::vector<std::pair<double, Index>>>& candidates, Index nf) {
     const Index nk = static_cast<Index>(candidates.size());
     const auto usable = [&](Index r, const std::pair<double, Index>& c) {
         return c.first < 1e-10 * candidates[static_cast<std::size_t>(r)][0].first;
@@ -307,7 +307,8 @@ std::vector<Index> kernel_pivots(const std::vector<std::vector<std::pair<double,
         const double sb = candidates[b].empty() ? 0 : candidates[b][0].first;
         return sa < sb;
     });
-    std::vector<Index> owner(static_cast<std::size_t>(nf), -1), owned(static_cast<std::size_t>(nk), -1);
+    std::vector<Index> owner(static_cast<std::size_t>(nf), -1),
+        owned(static_cast<std::size_t>(nk), -1);
     const auto take = [&](Index r, Index j) {
         owner[j] = r;
         owned[r] = j;
@@ -509,9 +510,9 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
         if (dagger[r].empty()) unsolved.push_back(r);
     std::vector<char> drop(kept.size(), 0);
     while (!unsolved.empty()) {
-        const auto weakest = std::min_element(
-            unsolved.begin(), unsolved.end(),
-            [&](std::size_t a, std::size_t b) { return weight(a) < weight(b); });
+        const auto weakest =
+            std::min_element(unsolved.begin(), unsolved.end(),
+                             [&](std::size_t a, std::size_t b) { return weight(a) < weight(b); });
         drop[*weakest] = 1;
         coarse_local[static_cast<std::size_t>(kept[*weakest])] = -1;
         unsolved.erase(weakest);
@@ -541,7 +542,8 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
         std::sort(dropped.begin(), dropped.end());
     }
     const Index nk = static_cast<Index>(kept.size());
-    CG_VERIFY(nk > 0, "mra: no DOF of the coarser level has a local left inverse of the refinement");
+    CG_VERIFY(nk > 0,
+              "mra: no DOF of the coarser level has a local left inverse of the refinement");
     ops.coarse_dofs = Eigen::Map<const IndexVector>(kept.data(), nk);
     ops.dropped_dofs =
         Eigen::Map<const IndexVector>(dropped.data(), static_cast<Index>(dropped.size()));

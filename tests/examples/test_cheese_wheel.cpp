@@ -94,7 +94,8 @@ TEST(ExamplesSlow, CheeseWheelHoleySideSagsMoreOnTheCoarseMesh) {
 // in tests/scene/test_solver_options.cpp): probes to 1e-7 relative, and the coarse model
 // compared with it to 1e-6.
 TEST(ExamplesSlow, CheeseWheelFineSolveByMraPcgMatchesCholmod) {
-    const ExampleRun direct = coarsegrain::test::run_example("cheese_wheel", json::object(), "naive");
+    const ExampleRun direct =
+        coarsegrain::test::run_example("cheese_wheel", json::object(), "naive");
     const ExampleRun iterative = coarsegrain::test::run_example(
         "cheese_wheel", {{"solver", {{"backend", "mra-pcg"}, {"tolerance", 1e-10}, {"levels", 2}}}},
         "naive");

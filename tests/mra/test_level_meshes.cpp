@@ -121,8 +121,8 @@ TEST(LevelMeshOperators, ANodeMeasuringOnlyFixedNodesIsDropped) {
         // is no pivot.
         Index node = -1;
         for (Index i = 0; i < coarse.num_nodes(); ++i)
-            if (rows.row(i).nonZeros() > 1 && (node < 0 || rows.row(i).nonZeros() <
-                                                               rows.row(node).nonZeros()))
+            if (rows.row(i).nonZeros() > 1 &&
+                (node < 0 || rows.row(i).nonZeros() < rows.row(node).nonZeros()))
                 node = i;
         std::vector<char> support(static_cast<std::size_t>(fine.num_nodes()), 0),
             is_pivot(support.size(), 0);
@@ -131,7 +131,8 @@ TEST(LevelMeshOperators, ANodeMeasuringOnlyFixedNodesIsDropped) {
         Index beside = -1;
         for (Index e = 0; e < fine.num_elements() && beside < 0; ++e) {
             bool touches = false;
-            for (Index a = 0; a < fine.elements.cols(); ++a) touches |= support[fine.elements(e, a)];
+            for (Index a = 0; a < fine.elements.cols(); ++a)
+                touches |= support[fine.elements(e, a)];
             for (Index a = 0; a < fine.elements.cols() && touches && beside < 0; ++a) {
                 const Index v = fine.elements(e, a);
                 if (!support[v] && !is_pivot[v]) beside = v;
@@ -142,8 +143,8 @@ TEST(LevelMeshOperators, ANodeMeasuringOnlyFixedNodesIsDropped) {
         std::vector<Index> present;
         for (Index d = 0; d < fine.num_dofs(); ++d)
             if (!support[d / dim]) present.push_back(d);
-        const IndexVector dofs = Eigen::Map<IndexVector>(present.data(),
-                                                         static_cast<Index>(present.size()));
+        const IndexVector dofs =
+            Eigen::Map<IndexVector>(present.data(), static_cast<Index>(present.size()));
         for (const bool keep : {false, true}) {
             const RefinementOperators ops =
                 local_refinement_operators(C_node, pivots, fine.elements, dim, dofs, keep);

@@ -203,12 +203,13 @@ struct CompareOptions {
 /// Options of the mra-pcg solver backend's multigrid preconditioner (mra/preconditioner.hpp; the
 /// scene's solver.levels, solver.radius, solver.smoother_degree).
 struct PreconditionerOptions {
-    /// Levels q >= 2 of the hierarchy; 0: the fewest levels whose coarsest grid has at most
-    /// coarsest_dofs DOFs, as far as the cells per axis halve (preconditioner_levels).
+    /// Levels q >= 2 of the hierarchy; 0: the fewest levels whose coarsest level has at most
+    /// coarsest_dofs DOFs, as far as the cells per axis halve on grids or the automatic level
+    /// meshes allow on simplices (preconditioner_levels).
     int levels = 0;
     /// Largest coarsest level of the automatic choice (DOFs, Dirichlet ones included).
     Index coarsest_dofs = 20000;
-    /// Localization radius rho of every step (rings of the finer grid, Options::radius).
+    /// Localization radius rho of every step (rings of the finer level, Options::radius).
     double radius = 1;
     /// Degree of the Chebyshev smoothing polynomial, before and after the coarse correction.
     int smoother_degree = 3;

@@ -196,11 +196,11 @@ FineModel build_fine_model(const Scene& scene, Timings* timings = nullptr);
 
 /// The solver options of the fine model's systems (its stiffness, step and shifted operators, all
 /// on the DOFs free of the Dirichlet conditions `model.bc`): the scene's, with mra-pcg's
-/// preconditioner bound to the fine grid (mra::hierarchy_preconditioner).
+/// preconditioner bound to the fine mesh (mra::hierarchy_preconditioner).
 solve::SolverOptions fine_solver(const Scene& scene, const FineModel& model);
 
 /// The solver options of every other system (coarse models, warps): the scene's, or CHOLMOD's
-/// defaults if the scene's backend is mra-pcg, which solves fine grid models only.
+/// defaults if the scene's backend is mra-pcg, which solves fine models only.
 solve::SolverOptions direct_solver(const Scene& scene);
 
 /// The result of a static solve on the fine model.
