@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <queue>
 #include <string>
 #include <utility>
 
@@ -287,19 +288,23 @@ class LeftInverseRow {
     int m_dim;
 };
 
-/// Kernel pivots: one of its candidate DOFs per row, distinct (candidates[r]: (-|C^†(r, j)
-/// C(r, j)|, j), sorted, products below 1e-10 of the row's largest left out). Each row takes its
-/// free DOF of largest product, rows served in the order of their largest product, which makes
-/// C^†[:, P] C[:, P]^T diagonally dominant where the rows are near injections and gives P = the
-/// pivots on nested meshes. A row whose candidates are all taken gets one by the shortest
-/// augmenting path (breadth-first): the rows along it move to other candidates of theirs.
-/// Returns each row's pivot DOF, -1 where none was found.
+/// Kernel pivots P, one fine DOF per row of C^† (rows: its (DOF, value) entries), such that
+/// C^†[:, P] is nonsingular, which is what makes W = S_N (I - C^T C^†) a basis of ker C (a
+/// y != 0 with C^†[:, P]^T y = 0 would give the kernel vector C^{†,T} y, zero on P, that the
+/// rows of W miss). Rows are served in the order of their largest |C^†(r, j) C(r, j)|
+/// (candidates[r]: (-|product|, j), sorted) and eliminated against the rows served before, as
+/// an LU factorization with threshold partial pivoting: a row takes its first candidate not yet
+/// taken whose reduced entry is at least kPreferred of its largest, else its largest. On
+/// nested meshes (C^† the injection) this gives P = the pivots; elsewhere the candidates keep
+/// C^†[:, P] C[:, P]^T diagonally dominant where the rows are near injections. The elimination
+/// only selects (W is formed exactly from P), so reduced entries below kDrop of the row's
+/// largest are dropped to bound the fill.
+/// Returns each row's pivot DOF, -1 where its reduced row vanished (a row dependent on others).
 std::vector<Index> kernel_pivots(
+    const std::vector<std::vector<std::pair<Index, double>>>& rows,
     const std::vector<std::vector<std::pair<double, Index>>>& candidates, Index nf) {
-    const Index nk = static_cast<Index>(candidates.size());
-    const auto usable = [&](Index r, const std::pair<double, Index>& c) {
-        return c.first < 1e-10 * candidates[static_cast<std::size_t>(r)][0].first;
-    };
+    constexpr double kPreferred = 0.1, kDrop = 1e-10;
+    const Index nk = static_cast<Index>(rows.size());
     std::vector<Index> order(static_cast<std::size_t>(nk));
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
@@ -307,43 +312,63 @@ std::vector<Index> kernel_pivots(
         const double sb = candidates[b].empty() ? 0 : candidates[b][0].first;
         return sa < sb;
     });
-    std::vector<Index> owner(static_cast<std::size_t>(nf), -1),
-        owned(static_cast<std::size_t>(nk), -1);
-    const auto take = [&](Index r, Index j) {
-        owner[j] = r;
-        owned[r] = j;
-    };
+    std::vector<Index> pivot(static_cast<std::size_t>(nk), -1);
+    std::vector<Index> served(static_cast<std::size_t>(nf), -1);  // column -> serving step
+    std::vector<std::vector<std::pair<Index, double>>> reduced;   // per step, its pivot first
+    std::vector<double> work(static_cast<std::size_t>(nf), 0.0);
+    std::vector<char> touched(static_cast<std::size_t>(nf), 0);
     for (const Index r : order) {
-        for (const auto& c : candidates[r])
-            if (usable(r, c) && owner[c.second] < 0) {
-                take(r, c.second);
-                break;
+        std::vector<Index> cols;
+        std::priority_queue<Index, std::vector<Index>, std::greater<>> steps;
+        const auto add = [&](Index c, double v) {
+            if (!touched[c]) {
+                touched[c] = 1;
+                cols.push_back(c);
+                if (served[c] >= 0) steps.push(served[c]);
             }
-        if (owned[r] >= 0 || candidates[r].empty()) continue;
-        // Breadth-first over rows: from a row to the owners of its usable candidates, until a
-        // free candidate ends the path.
-        std::map<Index, Index> reached_from;  // DOF -> the row whose candidate it is
-        std::vector<Index> queue{r};
-        for (std::size_t next = 0; next < queue.size() && owned[r] < 0; ++next) {
-            const Index x = queue[next];
-            for (const auto& c : candidates[x]) {
-                if (!usable(x, c) || !reached_from.emplace(c.second, x).second) continue;
-                if (owner[c.second] >= 0) {
-                    queue.push_back(owner[c.second]);
-                    continue;
+            work[c] += v;
+        };
+        for (const auto& [c, v] : rows[r]) add(c, v);
+        double scale = 0;
+        for (const auto& [c, v] : rows[r]) scale = std::max(scale, std::abs(v));
+        // Steps in increasing order: a reduced row vanishes at the pivots of earlier steps.
+        while (!steps.empty()) {
+            const Index step = steps.top();
+            steps.pop();
+            const auto& u = reduced[static_cast<std::size_t>(step)];
+            const double factor = work[u[0].first] / u[0].second;
+            if (factor == 0) continue;
+            for (const auto& [c, v] : u) add(c, -factor * v);
+            work[u[0].first] = 0;
+        }
+        double largest = 0;
+        for (const Index c : cols)
+            if (served[c] < 0) largest = std::max(largest, std::abs(work[c]));
+        Index chosen = -1;
+        if (largest > kDrop * scale) {
+            for (const auto& [product, j] : candidates[r])
+                if (touched[j] && served[j] < 0 && std::abs(work[j]) >= kPreferred * largest) {
+                    chosen = j;
+                    break;
                 }
-                for (Index j = c.second, row = x;;) {  // shift the pivots along the path
-                    const Index previous = owned[row];
-                    take(row, j);
-                    if (row == r) break;
-                    j = previous;
-                    row = reached_from.at(previous);
-                }
-                break;
-            }
+            for (const Index c : cols)
+                if (chosen < 0 && served[c] < 0 && std::abs(work[c]) == largest) chosen = c;
+        }
+        if (chosen >= 0) {
+            std::vector<std::pair<Index, double>> u{{chosen, work[chosen]}};
+            for (const Index c : cols)
+                if (c != chosen && served[c] < 0 && std::abs(work[c]) > kDrop * largest)
+                    u.emplace_back(c, work[c]);
+            served[chosen] = static_cast<Index>(reduced.size());
+            reduced.push_back(std::move(u));
+            pivot[r] = chosen;
+        }
+        for (const Index c : cols) {
+            work[c] = 0;
+            touched[c] = 0;
         }
     }
-    return owned;
+    return pivot;
 }
 
 }  // namespace
@@ -566,8 +591,7 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
     ops.C_dagger.setFromTriplets(t.begin(), t.end());
 
     // W = S_N (I - C^T C^†) on the fine DOFs N outside a set P of one DOF per row (the kernel
-    // pivots). W[:, N] = I - C[:, N]^T C^†[:, N] is invertible exactly when C^†[:, P] C[:, P]^T
-    // is (C^† C^T = I): kernel_pivots.
+    // pivots, kernel_pivots).
     std::vector<std::vector<std::pair<double, Index>>> candidates(static_cast<std::size_t>(nk));
     {
         const RowMajor C_rows = ops.C;
@@ -582,7 +606,7 @@ RefinementOperators local_refinement_operators(const SparseMatrix& C_node,
             std::sort(candidates[r].begin(), candidates[r].end());
         }
     }
-    const std::vector<Index> kernel_pivot = kernel_pivots(candidates, nf);
+    const std::vector<Index> kernel_pivot = kernel_pivots(dagger, candidates, nf);
     std::vector<char> is_kernel_pivot(static_cast<std::size_t>(nf), 0);
     for (Index r = 0; r < nk; ++r) {
         CG_VERIFY(kernel_pivot[r] >= 0,

@@ -76,13 +76,15 @@ std::vector<Index> pivot_nodes(const Matrix& coarse_positions, const Matrix& fin
 /// the others without a row of C^† solved again; the dropped DOFs join dropped_dofs.
 ///
 /// The kernel is W = S_N (I - C^T C^†), S_N selecting the present fine DOFs outside a set P of one
-/// kernel pivot per kept row (ascending): C W^T = C - C C^{†,T} C = 0, and W has full row rank
-/// exactly when C^†[:, P] C[:, P]^T is invertible. Row r takes as its kernel pivot the DOF j not
-/// yet taken with the largest |C^†(r, j) C(r, j)|, rows served in the order of their largest
-/// product; on nested meshes P are the pivots and W = [-P I] as on grids. (The pivots of C^†
-/// alone do not do: between levels whose spacings differ by less than 2 along an axis, a row's
-/// exact left inverse can vanish at its nearest fine node.) A row of W holds its DOF and the
-/// rows of C^† of the coarse nodes whose hat functions reach it.
+/// kernel pivot per kept row: C W^T = C - C C^{†,T} C = 0, and W has full row rank exactly when
+/// C^†[:, P] is nonsingular (a y != 0 with C^†[:, P]^T y = 0 gives the kernel vector C^{†,T} y,
+/// zero on P, which the rows of W miss). P comes from an LU elimination of the rows of C^† with
+/// threshold partial pivoting, rows served in the order of their largest |C^†(r, j) C(r, j)|,
+/// each taking its DOF of largest such product not yet taken if its reduced entry is at least a
+/// tenth of the row's largest, else its largest: on nested meshes P are the pivots and W = [-P I]
+/// as on grids. (A matching of rows to DOFs is not enough: on distorted tetrahedra it left
+/// C^†[:, P] with singular values down to 1e-15, docs/level-meshes.md.) A row of W holds its DOF
+/// and the rows of C^† of the coarse nodes whose hat functions reach it.
 /// @param[in] C_node     scalar refinement, #coarse nodes by #fine nodes
 /// @param[in] pivots     distinct pivot fine node of every coarse node (pivot_nodes)
 /// @param[in] fine_elements  elements of the finer level's mesh (node indices)
