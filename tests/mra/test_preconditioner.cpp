@@ -95,21 +95,26 @@ TEST(MraPcg, IterationsBoundedAsTheGridDoubles) {
     EXPECT_LE(iterations.back(), iterations.front());
 }
 
-// The V-cycle M^{-1} formed column by column on small problems: symmetric to round-off, and
-// positive definite (its smallest eigenvalue well above round-off relative to the largest).
+/// The V-cycle M^{-1} of problem p formed column by column: symmetric to round-off, and positive
+/// definite (its smallest eigenvalue well above round-off relative to the largest).
+void expect_symmetric_positive_definite(const test::GridProblem& p,
+                                        const mra::PreconditionerOptions& o) {
+    const fem::ReducedSystem sys = fem::reduce(p.K, p.f, p.bc);
+    const auto M = mra::hierarchy_preconditioner(p.mesh, p.bc.dofs, o)(sys.K);
+    const Index m = sys.K.rows();
+    Matrix dense(m, m);
+    for (Index j = 0; j < m; ++j) dense.col(j) = M->apply(Vector::Unit(m, j));
+    EXPECT_LE((dense - dense.transpose()).norm(), 1e-12 * dense.norm());
+    const Eigen::SelfAdjointEigenSolver<Matrix> eig(0.5 * (dense + dense.transpose()));
+    EXPECT_GT(eig.eigenvalues().minCoeff(), 1e-8 * eig.eigenvalues().maxCoeff());
+}
+
 TEST(MraPcg, PreconditionerIsSymmetricPositiveDefinite) {
     for (const auto& [dim, n, levels] : {std::tuple{2, 16, 3}, std::tuple{3, 4, 2}}) {
-        const test::GridProblem p = checker_problem(dim, n, 1e3);
-        const fem::ReducedSystem sys = fem::reduce(p.K, p.f, p.bc);
+        SCOPED_TRACE(std::to_string(dim) + "D");
         mra::PreconditionerOptions o;
         o.levels = levels;
-        const auto M = mra::hierarchy_preconditioner(p.mesh, p.bc.dofs, o)(sys.K);
-        const Index m = sys.K.rows();
-        Matrix dense(m, m);
-        for (Index j = 0; j < m; ++j) dense.col(j) = M->apply(Vector::Unit(m, j));
-        EXPECT_LE((dense - dense.transpose()).norm(), 1e-12 * dense.norm()) << dim << "D";
-        const Eigen::SelfAdjointEigenSolver<Matrix> eig(0.5 * (dense + dense.transpose()));
-        EXPECT_GT(eig.eigenvalues().minCoeff(), 1e-8 * eig.eigenvalues().maxCoeff()) << dim << "D";
+        expect_symmetric_positive_definite(checker_problem(dim, n, 1e3), o);
     }
 }
 
@@ -146,15 +151,8 @@ TEST(MraPcgUnstructured, MatchesCholmod) {
 // As PreconditionerIsSymmetricPositiveDefinite, on automatic level meshes.
 TEST(MraPcgUnstructured, PreconditionerIsSymmetricPositiveDefinite) {
     for (const auto& [dim, n] : {std::tuple{2, 16}, std::tuple{3, 5}}) {
-        const test::GridProblem p = unstructured_checker_problem(dim, n, 1e3);
-        const fem::ReducedSystem sys = fem::reduce(p.K, p.f, p.bc);
-        const auto M = mra::hierarchy_preconditioner(p.mesh, p.bc.dofs, {})(sys.K);
-        const Index m = sys.K.rows();
-        Matrix dense(m, m);
-        for (Index j = 0; j < m; ++j) dense.col(j) = M->apply(Vector::Unit(m, j));
-        EXPECT_LE((dense - dense.transpose()).norm(), 1e-12 * dense.norm()) << dim << "D";
-        const Eigen::SelfAdjointEigenSolver<Matrix> eig(0.5 * (dense + dense.transpose()));
-        EXPECT_GT(eig.eigenvalues().minCoeff(), 1e-8 * eig.eigenvalues().maxCoeff()) << dim << "D";
+        SCOPED_TRACE(std::to_string(dim) + "D");
+        expect_symmetric_positive_definite(unstructured_checker_problem(dim, n, 1e3), {});
     }
 }
 
