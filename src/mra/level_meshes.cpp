@@ -347,7 +347,7 @@ std::vector<Index> kernel_pivots(
         Index chosen = -1;
         if (largest > kDrop * scale) {
             for (const auto& [product, j] : candidates[r])
-                if (touched[j] && served[j] < 0 && std::abs(work[j]) >= kPreferred * largest) {
+                if (served[j] < 0 && std::abs(work[j]) >= kPreferred * largest) {
                     chosen = j;
                     break;
                 }

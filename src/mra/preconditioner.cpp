@@ -96,7 +96,10 @@ int preconditioner_levels(const mesh::Mesh& fine, const PreconditionerOptions& o
               "tetrahedra, got {} elements",
               mesh::element_name(fine.type));
     const int most = max_automatic_levels(fine);
-    const int dim = fine.dim();
+    CG_VERIFY(most >= 2,
+              "solver (mra-pcg): a fine mesh of {} nodes is too small for a coarser level; use "
+              "cholmod",
+              fine.num_nodes());
     if (options.levels > 0) {
         CG_VERIFY(options.levels <= most,
                   "solver.levels = {}: the automatic level meshes of a fine mesh of {} nodes allow "
@@ -104,15 +107,12 @@ int preconditioner_levels(const mesh::Mesh& fine, const PreconditionerOptions& o
                   options.levels, fine.num_nodes(), most);
         return options.levels;
     }
-    int q = 2;
+    const int dim = fine.dim();
     const auto coarsest_dofs = [&](int levels) {
         return dim * std::ldexp(static_cast<double>(fine.num_nodes()), -dim * (levels - 1));
     };
+    int q = 2;
     while (q < most && coarsest_dofs(q) > static_cast<double>(options.coarsest_dofs)) ++q;
-    CG_VERIFY(q <= most,
-              "solver (mra-pcg): a fine mesh of {} nodes is too small for a coarser level; use "
-              "cholmod",
-              fine.num_nodes());
     return q;
 }
 
