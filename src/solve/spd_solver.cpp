@@ -183,11 +183,11 @@ std::string ordering_name(int ordering) {
 }
 
 /// Fill-reducing order of a symmetric pattern (n columns, CSC arrays p and i, lower triangle
-/// read) from CHOLMOD's analysis for the ordering only (simplicial, postordered): each of
-/// `methods` (CHOLMOD_AMD, ...) is tried and the one with the smaller factor kept. Returns the
+/// read) from CHOLMOD's analysis for the ordering only (simplicial, postordered): AMD and, with
+/// `nested_dissection`, METIS are tried and the one with the smaller factor kept. Returns the
 /// permutation (new column k = old perm[k]) and the chosen method.
 std::pair<std::vector<int>, int> order_pattern(Index n, const int* p, const int* i,
-                                               std::initializer_list<int> methods) {
+                                               bool nested_dissection) {
     cholmod_sparse pattern{};
     pattern.nrow = pattern.ncol = static_cast<std::size_t>(n);
     pattern.nzmax = static_cast<std::size_t>(p[n]);
@@ -203,7 +203,8 @@ std::pair<std::vector<int>, int> order_pattern(Index n, const int* p, const int*
     cholmod_start(&common);
     common.print = 0;
     common.nmethods = 0;
-    for (const int m : methods) common.method[common.nmethods++].ordering = m;
+    common.method[common.nmethods++].ordering = CHOLMOD_AMD;
+    if (nested_dissection) common.method[common.nmethods++].ordering = CHOLMOD_METIS;
     common.postorder = 1;
     common.supernodal = CHOLMOD_SIMPLICIAL;  // only the ordering is wanted
     cholmod_factor* L = cholmod_analyze(&pattern, &common);
@@ -220,12 +221,14 @@ std::pair<std::vector<int>, int> order_pattern(Index n, const int* p, const int*
 }
 
 /// Fill-reducing ordering of A computed on its quotient graph: one vertex per column group
-/// (a node), an edge where A has an entry between two groups. CHOLMOD tries AMD and METIS
-/// nested dissection on that graph, which has about (n / #groups)^2 times fewer edges than A,
-/// and keeps the one with the smaller factor nnz(L); each group is then expanded to its columns, in
-/// order. Returns the permutation (new column k = old perm[k]) and the name of the graph ordering.
+/// (a node), an edge where A has an entry between two groups. CHOLMOD tries AMD and (with
+/// `nested_dissection`) METIS on that graph, which has about (n / #groups)^2 times fewer edges
+/// than A, and keeps the one with the smaller factor nnz(L); each group is then expanded to its
+/// columns, in order. Returns the permutation (new column k = old perm[k]) and the name of the
+/// graph ordering.
 std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
-                                                        const std::vector<Index>& start) {
+                                                        const std::vector<Index>& start,
+                                                        bool nested_dissection = true) {
     const Index groups = static_cast<Index>(start.size()) - 1;
     std::vector<Index> group_of(A.cols());
     for (Index g = 0; g < groups; ++g)
@@ -243,7 +246,7 @@ std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
         p.push_back(static_cast<int>(rows.size()));
     }
     const auto [group_perm, method] =
-        order_pattern(groups, p.data(), rows.data(), {CHOLMOD_AMD, CHOLMOD_METIS});
+        order_pattern(groups, p.data(), rows.data(), nested_dissection);
     std::vector<int> perm;
     perm.reserve(A.cols());
     for (Index k = 0; k < groups; ++k)
@@ -480,7 +483,7 @@ Matrix DenseCholesky::solve(const Matrix& b) const {
     return x;
 }
 
-IndexVector fill_reducing_order(const SparseMatrix& A, int node_dofs) {
+IndexVector fill_reducing_order(const SparseMatrix& A, int node_dofs, bool nested_dissection) {
     CG_VERIFY(A.rows() == A.cols() && A.isCompressed(),
               "fill_reducing_order: the matrix must be square and compressed, got {} by {}",
               A.rows(), A.cols());
@@ -490,9 +493,8 @@ IndexVector fill_reducing_order(const SparseMatrix& A, int node_dofs) {
     const std::vector<Index> start = column_groups(A, node_dofs);
     const std::vector<int> perm =
         static_cast<Index>(start.size()) - 1 < A.rows()
-            ? group_ordering(A, start).first
-            : order_pattern(A.rows(), A.outerIndexPtr(), A.innerIndexPtr(),
-                            {CHOLMOD_AMD, CHOLMOD_METIS})
+            ? group_ordering(A, start, nested_dissection).first
+            : order_pattern(A.rows(), A.outerIndexPtr(), A.innerIndexPtr(), nested_dissection)
                   .first;
     return Eigen::Map<const IndexVector>(perm.data(), A.rows());
 }

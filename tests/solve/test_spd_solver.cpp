@@ -585,6 +585,36 @@ TEST(DenseCholesky, SolvesAndReportsTheFailingMinor) {
     EXPECT_THROW(llt.compute(Matrix(3, 4)), Error);
 }
 
+/// P A P^T for the permutation perm (new column k = old perm[k]), rows sorted.
+SparseMatrix permuted(const SparseMatrix& A, const IndexVector& perm) {
+    const Index n = A.rows();
+    std::vector<Index> position(static_cast<std::size_t>(n));
+    for (Index k = 0; k < n; ++k) position[static_cast<std::size_t>(perm[k])] = k;
+    SparseMatrix P(n, n);  // filled column by column with reversed rows
+    P.resizeNonZeros(A.nonZeros());
+    Index e = 0;
+    for (Index k = 0; k < n; ++k) {
+        P.outerIndexPtr()[k] = e;
+        std::vector<std::pair<Index, double>> column;
+        for (SparseMatrix::InnerIterator it(A, perm[k]); it; ++it)
+            column.emplace_back(position[static_cast<std::size_t>(it.row())], it.value());
+        std::sort(column.rbegin(), column.rend());
+        for (const auto& [row, value] : column) {
+            P.innerIndexPtr()[e] = row;
+            P.valuePtr()[e++] = value;
+        }
+    }
+    P.outerIndexPtr()[n] = e;
+    return P;
+}
+
+solve::SolverOptions kept_order_options() {
+    solve::SolverOptions options;
+    options.keep_order = true;
+    options.check_input = false;
+    return options;
+}
+
 // keep_order with fill_reducing_order: a matrix permuted by its order and factorized in that
 // order (rows of each column in reverse, unsorted, as the hierarchy's localized solves build them)
 // has the solution of the default analysis (1e-12 relative: condition number about 40) and a
@@ -607,30 +637,10 @@ TEST(SpdSolver, KeepOrderFactorizesInTheCallersFillReducingOrder) {
                 ASSERT_EQ(perm[k] % node_dofs, 0);
                 ASSERT_EQ(perm[k + d], perm[k] + d);
             }
-        std::vector<Index> position(static_cast<std::size_t>(n));
-        for (Index k = 0; k < n; ++k) position[static_cast<std::size_t>(perm[k])] = k;
-        SparseMatrix P(n, n);  // P A P^T, filled column by column with reversed rows
-        P.resizeNonZeros(A.nonZeros());
-        Index e = 0;
-        for (Index k = 0; k < n; ++k) {
-            P.outerIndexPtr()[k] = e;
-            std::vector<std::pair<Index, double>> column;
-            for (SparseMatrix::InnerIterator it(A, perm[k]); it; ++it)
-                column.emplace_back(position[static_cast<std::size_t>(it.row())], it.value());
-            std::sort(column.rbegin(), column.rend());
-            for (const auto& [row, value] : column) {
-                P.innerIndexPtr()[e] = row;
-                P.valuePtr()[e++] = value;
-            }
-        }
-        P.outerIndexPtr()[n] = e;
-        solve::SolverOptions options;
-        options.keep_order = true;
-        options.check_input = false;
-        solve::SpdSolver kept(options);
-        kept.factorize(P);
+        solve::SpdSolver kept(kept_order_options());
+        kept.factorize(permuted(A, perm));
         EXPECT_EQ(kept.factor_stats().ordering, "natural");
-        solve::SpdSolver natural(options);
+        solve::SpdSolver natural(kept_order_options());
         natural.factorize(A);
         solve::SolverOptions default_options;
         default_options.node_dofs = node_dofs;
@@ -648,6 +658,31 @@ TEST(SpdSolver, KeepOrderFactorizesInTheCallersFillReducingOrder) {
     }
     EXPECT_THROW(solve::fill_reducing_order(SparseMatrix(3, 4)), Error);
     EXPECT_THROW(solve::fill_reducing_order(shifted(grid_laplacian(3, 2, 1.0, 1), 0.5), 0), Error);
+}
+
+// Without nested dissection the order is AMD's alone: still a permutation keeping each node's
+// columns together, with a factor at least that of the better of AMD and METIS (which the
+// default keeps; 5% for supernode amalgamation, as above) and under 60% of the natural order's.
+TEST(SpdSolver, FillReducingOrderByAmdAlone) {
+    const SparseMatrix L = shifted(grid_laplacian(10, 3, 1.0, 31), 0.5);
+    const Matrix M = Matrix::Constant(3, 3, 0.5) + 1.5 * Matrix::Identity(3, 3);
+    const SparseMatrix A = kron(L, M);
+    const IndexVector amd = solve::fill_reducing_order(A, 3, false);
+    ASSERT_TRUE(is_permutation_of_range(amd, A.rows()));
+    for (Index k = 0; k < A.rows(); k += 3) {
+        ASSERT_EQ(amd[k] % 3, 0);
+        ASSERT_EQ(amd[k + 1], amd[k] + 1);
+        ASSERT_EQ(amd[k + 2], amd[k] + 2);
+    }
+    const auto factor_nonzeros = [&](const SparseMatrix& P) {
+        solve::SpdSolver s(kept_order_options());
+        s.factorize(P);
+        return s.factor_stats().nonzeros;
+    };
+    const double alone = factor_nonzeros(permuted(A, amd));
+    const double best = factor_nonzeros(permuted(A, solve::fill_reducing_order(A, 3)));
+    EXPECT_GE(alone, 0.95 * best);
+    EXPECT_LT(alone, 0.6 * factor_nonzeros(A));
 }
 
 // lower_triangle: every backend, sparse and dense (CHOLMOD's LAPACK path), solves with the

@@ -128,11 +128,14 @@ std::vector<Index> column_groups(const SparseMatrix& A, int max_size);
 
 /// Fill-reducing order of the pattern of a symmetric A (both triangles stored, rows sorted), for
 /// SolverOptions::keep_order: CHOLMOD's AMD and METIS, whichever gives the smaller factor
-/// nnz(L), followed by the elimination-tree postorder (new column k = old perm[k]). With
-/// node_dofs > 1 they order the graph of nodes (runs of up to node_dofs consecutive columns with
-/// identical patterns), as SpdSolver's analysis does, and each node is expanded to its columns.
+/// nnz(L) (AMD alone without `nested_dissection`: METIS costs more than it saves on a system
+/// factorized once), followed by the elimination-tree postorder (new column k = old perm[k]).
+/// With node_dofs > 1 they order the graph of nodes (runs of up to node_dofs consecutive columns
+/// with identical patterns), as SpdSolver's analysis does, and each node is expanded to its
+/// columns.
 /// @throws Error if A is not square and compressed, or node_dofs < 1
-IndexVector fill_reducing_order(const SparseMatrix& A, int node_dofs = 1);
+IndexVector fill_reducing_order(const SparseMatrix& A, int node_dofs = 1,
+                                bool nested_dissection = true);
 
 /// Symmetric positive-definite sparse solver that keeps its factorization: factorize once,
 /// solve many right-hand sides. Checks that the matrix is square, finite and symmetric, and
