@@ -65,7 +65,8 @@ def main():
     parser.add_argument("cli", nargs="?", default=os.path.join(ROOT, "build/release/coarsegrain"))
     parser.add_argument("--factors", type=float, nargs="+", default=[2, 1.5, 1.25, 1])
     parser.add_argument("--methods", nargs="+", default=["mra-dirac", "mra-linear"])
-    parser.add_argument("--out", help="also write the table to this markdown file")
+    parser.add_argument("--out", help="also write the table to this markdown file (its sections "
+                        "after the table are kept)")
     args = parser.parse_args()
     lines = ["| FACTOR | fine nodes | method | build s | peak GB | B density (fine step) "
              "| energy error | l2 error | compliance ratio |",
@@ -85,8 +86,20 @@ def main():
                 lines.append(row(factor, method, summary))
                 print(lines[-1], flush=True)
     if args.out:
-        with open(args.out, "w") as f:
-            f.write(HEADER + "\n".join(lines) + "\n")
+        write_table(args.out, HEADER + "\n".join(lines) + "\n")
+
+
+def write_table(path, text):
+    """Writes text to path, keeping the sections (from the first "## " heading) it had."""
+    kept = ""
+    if os.path.exists(path):
+        with open(path) as f:
+            old = f.read()
+        start = old.find("\n## ")
+        if start >= 0:
+            kept = old[start:]
+    with open(path, "w") as f:
+        f.write(text + kept)
 
 
 if __name__ == "__main__":
