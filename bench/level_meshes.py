@@ -39,10 +39,14 @@ Regenerate with
 """
 
 
-def run_method(cli, scene, method, out):
-    """Runs one coarsen and returns the method's summary.json."""
+def run_method(cli, scene, method, out, timeout=None):
+    """Runs one coarsen and returns the method's summary.json, or None if it ran out of
+    `timeout` seconds."""
     cmd = [cli, "coarsen", scene, "--method", method, "--out", out]
-    p = subprocess.run(cmd, capture_output=True, text=True)
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None
     if p.returncode != 0:
         sys.exit(f"error: {' '.join(cmd)} failed:\n{p.stdout}\n{p.stderr}")
     with open(os.path.join(out, "summary.json")) as f:

@@ -24,10 +24,9 @@ import argparse
 import json
 import os
 import subprocess
-import sys
 import tempfile
 
-from level_meshes import write_table
+from level_meshes import run_method, write_table
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -60,19 +59,6 @@ Regenerate with
     python3 bench/table1_tets.py --out docs/table1-tets.md
 
 """
-
-
-def run(cli, scene, method, out, timeout=None):
-    """Runs one coarsen; returns its summary.json, or None if it ran out of `timeout` seconds."""
-    cmd = [cli, "coarsen", scene, "--method", method, "--out", out]
-    try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-    except subprocess.TimeoutExpired:
-        return None
-    if p.returncode != 0:
-        sys.exit(f"error: {' '.join(cmd)} failed:\n{p.stdout}\n{p.stderr}")
-    with open(os.path.join(out, "summary.json")) as f:
-        return json.load(f)
 
 
 def row(summary, method, radius):
@@ -132,13 +118,13 @@ def main():
             fine_nodes = None
             for radius in args.radii:
                 path = scene(folder, coarse, radius, f"dirac_{radius:g}.json")
-                summary = run(args.cli, path, "mra-dirac", os.path.join(folder, "out"))
+                summary = run_method(args.cli, path, "mra-dirac", os.path.join(folder, "out"))
                 fine_nodes = summary["fine"]["nodes"]
                 lines.append(row(summary, "mra-dirac", f"{radius:g}"))
                 print(lines[-1], flush=True)
             if fine_nodes <= args.accurate_max_nodes:
                 path = scene(folder, coarse, "inf", "linear_global.json")
-                summary = run(args.cli, path, "mra-linear", os.path.join(folder, "out"),
+                summary = run_method(args.cli, path, "mra-linear", os.path.join(folder, "out"),
                               args.accurate_timeout)
                 lines.append(row(summary, "mra-linear", "global") if summary else
                              f"| {fine_nodes} | - | mra-linear | global | not done in "
