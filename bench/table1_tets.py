@@ -115,7 +115,6 @@ def main():
             folder = os.path.join(work, f"f{factor:g}")
             subprocess.run([os.path.join(EXAMPLE, "make_mesh"), folder, f"{factor:g}"],
                            check=True)
-            fine_nodes = None
             for radius in args.radii:
                 path = scene(folder, coarse, radius, f"dirac_{radius:g}.json")
                 summary = run_method(args.cli, path, "mra-dirac", os.path.join(folder, "out"))
@@ -125,7 +124,7 @@ def main():
             if fine_nodes <= args.accurate_max_nodes:
                 path = scene(folder, coarse, "inf", "linear_global.json")
                 summary = run_method(args.cli, path, "mra-linear", os.path.join(folder, "out"),
-                              args.accurate_timeout)
+                                     args.accurate_timeout)
                 lines.append(row(summary, "mra-linear", "global") if summary else
                              f"| {fine_nodes} | - | mra-linear | global | not done in "
                              f"{args.accurate_timeout:g} s |" + " |" * 9)

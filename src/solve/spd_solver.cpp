@@ -228,7 +228,7 @@ std::pair<std::vector<int>, int> order_pattern(Index n, const int* p, const int*
 /// graph ordering.
 std::pair<std::vector<int>, std::string> group_ordering(const SparseMatrix& A,
                                                         const std::vector<Index>& start,
-                                                        bool nested_dissection = true) {
+                                                        bool nested_dissection) {
     const Index groups = static_cast<Index>(start.size()) - 1;
     std::vector<Index> group_of(A.cols());
     for (Index g = 0; g < groups; ++g)
@@ -666,7 +666,7 @@ void SpdSolver::analyze(const SparseMatrix& A) {
                 s.cholmod->analyzePattern(A);
             } else if (const std::vector<Index> start = column_groups(A, s.options.node_dofs);
                        static_cast<Index>(start.size()) - 1 < s.n) {
-                auto [perm, name] = group_ordering(A, start);
+                auto [perm, name] = group_ordering(A, start, true);
                 s.cholmod->analyze_permuted(A, perm);
                 ordering = std::move(name);
             } else {

@@ -585,6 +585,8 @@ TEST(DenseCholesky, SolvesAndReportsTheFailingMinor) {
     EXPECT_THROW(llt.compute(Matrix(3, 4)), Error);
 }
 
+namespace {
+
 /// P A P^T for the permutation perm (new column k = old perm[k]), rows sorted.
 SparseMatrix permuted(const SparseMatrix& A, const IndexVector& perm) {
     const Index n = A.rows();
@@ -614,6 +616,8 @@ solve::SolverOptions kept_order_options() {
     options.check_input = false;
     return options;
 }
+
+}  // namespace
 
 // keep_order with fill_reducing_order: a matrix permuted by its order and factorized in that
 // order (rows of each column in reverse, unsorted, as the hierarchy's localized solves build them)
