@@ -7,8 +7,8 @@
 //   - cholmod: assembly, analysis + factorization, the solve; a second right-hand side (gravity
 //     along x) with the factorization;
 //   - mra-pcg: the hierarchy's build, the V-cycle's set-up (Galerkin copies, eigenvalue
-//     estimates, the coarsest factorization), the PCG iterations, and the same second
-//     right-hand side with the preconditioner kept;
+//     estimates, the coarsest factorization), the deflation by the stiff clusters' rigid motions,
+//     the PCG iterations, and the same second right-hand side with the preconditioner kept;
 //   - amg: the baseline users would pick, hypre's BoomerAMG (Debian's libhypre-dev, one MPI
 //     rank) as the preconditioner of hypre's PCG with the same stopping rule, set up for
 //     elasticity as hypre's documentation and MFEM's elasticity options advise: nodal coarsening
@@ -22,10 +22,15 @@
 //
 //   OMP_NUM_THREADS=2 OPENBLAS_NUM_THREADS=2 build/release/bench/bench_fine_pcg
 //       [--sizes 32,48] [--contrasts 1e3,1e6] [--fields checker,spheres]
-//       [--backends cholmod,mra-pcg,amg] [--levels Q] [--radius R] [--degree D] [--out FILE]
-// (--levels, --radius, --degree: mra-pcg's solver.levels, solver.radius and
-// solver.smoother_degree; default the scene's defaults: automatic levels, radius 1, degree 3.)
+//       [--backends cholmod,mra-pcg,amg] [--levels Q] [--radius R] [--degree D]
+//       [--deflation-rings N|off] [--out FILE]
+// (--levels, --radius, --degree, --deflation-rings: mra-pcg's solver.levels, solver.radius,
+// solver.smoother_degree and solver.deflation_rings, "off" for solver.deflation false; default
+// the scene's defaults: automatic levels, radius 1, degree 3, deflation over 2 rings.)
+#include <HYPRE.h>
+#include <HYPRE_parcsr_ls.h>
 #include <fmt/format.h>
+#include <mpi.h>
 #include <sys/resource.h>
 
 #include <chrono>
@@ -37,13 +42,10 @@
 #include <string>
 #include <vector>
 
-#include <HYPRE.h>
-#include <HYPRE_parcsr_ls.h>
-#include <mpi.h>
-
 #include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/mra/preconditioner.hpp"
 #include "coarsegrain/scene/scene.hpp"
+#include "coarsegrain/solve/deflation.hpp"
 
 using namespace coarsegrain;
 
@@ -133,8 +135,7 @@ class HypreAmg {
         HYPRE_IJMatrixSetObjectType(m_ij, HYPRE_PARCSR);
         std::vector<HYPRE_Int> sizes(static_cast<std::size_t>(n));
         for (HYPRE_BigInt j = 0; j < n; ++j)
-            sizes[static_cast<std::size_t>(j)] =
-                K.outerIndexPtr()[j + 1] - K.outerIndexPtr()[j];
+            sizes[static_cast<std::size_t>(j)] = K.outerIndexPtr()[j + 1] - K.outerIndexPtr()[j];
         HYPRE_IJMatrixSetRowSizes(m_ij, sizes.data());
         HYPRE_IJMatrixInitialize(m_ij);
         std::vector<HYPRE_BigInt> cols;
@@ -153,7 +154,8 @@ class HypreAmg {
             for (Index i = 0; i < v.size(); ++i) {
                 const Index node = free[i] / 3;
                 const int d = static_cast<int>(free[i] % 3);
-                const Eigen::Vector3d x = model.mesh.rest_positions.row(node).transpose().array() - 0.5;
+                const Eigen::Vector3d x =
+                    model.mesh.rest_positions.row(node).transpose().array() - 0.5;
                 if (m < 3) {
                     v[i] = d == m ? 1.0 : 0.0;
                 } else {
@@ -231,8 +233,8 @@ int run_one_caught(const std::string& backend, int n, const std::string& field, 
     try {
         return run_one(backend, n, field, contrast, mra_options);
     } catch (const std::exception& e) {
-        const nlohmann::json out = {{"backend", backend}, {"error", e.what()},
-                                    {"peak_gb", peak_rss_gb()}};
+        const nlohmann::json out = {
+            {"backend", backend}, {"error", e.what()}, {"peak_gb", peak_rss_gb()}};
         fmt::print("{}\n", out.dump());
         return 0;
     }
@@ -295,15 +297,17 @@ int run_one(const std::string& backend, int n, const std::string& field, double 
     } else {
         t0 = Clock::now();
         const auto factory =
-            mra::hierarchy_preconditioner(model.mesh, model.bc.dofs, mra_options);
+            mra::hierarchy_preconditioner(model.mesh, model.materials, model.bc.dofs, mra_options);
         const std::unique_ptr<solve::Preconditioner> M = factory(sys.K);
         out["setup_s"] = seconds_since(t0);
-        const auto* mg = dynamic_cast<const mra::MultigridPreconditioner*>(M.get());
+        const mra::MultigridPreconditioner& cycle = mra::multigrid_cycle(*M);
+        const auto* deflated = dynamic_cast<const solve::DeflatedPreconditioner*>(M.get());
+        out["deflation_vectors"] = deflated ? deflated->vectors() : 0;
         double build = 0;
-        for (const auto& [phase, seconds] : mg->hierarchy().timings.entries()) build += seconds;
+        for (const auto& [phase, seconds] : cycle.hierarchy().timings.entries()) build += seconds;
         out["build_s"] = build;
-        out["levels"] = mg->hierarchy().num_levels();
-        out["coarsest_dofs"] = mg->level_sizes().front().first;
+        out["levels"] = cycle.hierarchy().num_levels();
+        out["coarsest_dofs"] = cycle.level_sizes().front().first;
         solve::PcgOptions pcg;
         pcg.tolerance = 1e-8;
         solve::PcgReport report;
@@ -332,11 +336,13 @@ std::vector<std::string> split(const std::string& s) {
 /// mra-pcg's options from the --levels, --radius and --degree values.
 /// @throws Error naming the option out of range (mra::validate)
 mra::PreconditionerOptions mra_options_of(const std::string& levels, const std::string& radius,
-                                          const std::string& degree) {
+                                          const std::string& degree, const std::string& rings) {
     mra::PreconditionerOptions o;
     o.levels = std::stoi(levels);
     o.radius = std::stod(radius);
     o.smoother_degree = std::stoi(degree);
+    o.deflation = rings != "off";
+    if (o.deflation) o.deflation_rings = std::stoi(rings);
     mra::validate(o);
     return o;
 }
@@ -344,22 +350,23 @@ mra::PreconditionerOptions mra_options_of(const std::string& levels, const std::
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc == 9 && std::string(argv[1]) == "--one") {
-        const mra::PreconditionerOptions mra_options = mra_options_of(argv[6], argv[7], argv[8]);
+    if (argc == 10 && std::string(argv[1]) == "--one") {
+        const mra::PreconditionerOptions mra_options =
+            mra_options_of(argv[6], argv[7], argv[8], argv[9]);
         if (std::string(argv[2]) != "amg")
             return run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]),
                                   mra_options);
         MPI_Init(&argc, &argv);
         HYPRE_Init();
-        const int code = run_one_caught(argv[2], std::atoi(argv[3]), argv[4],
-                                        std::atof(argv[5]), mra_options);
+        const int code =
+            run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]), mra_options);
         HYPRE_Finalize();
         MPI_Finalize();
         return code;
     }
     std::string sizes = "32,48", contrasts = "1e3,1e6", fields = "checker,spheres",
                 backends = "cholmod,mra-pcg,amg", levels = "0", radius = "1", degree = "3",
-                out = std::string(COARSEGRAIN_SOURCE_DIR) + "/docs/fine_pcg_bench.md";
+                rings = "2", out = std::string(COARSEGRAIN_SOURCE_DIR) + "/docs/fine_pcg_bench.md";
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string key = argv[i], value = argv[i + 1];
         if (key == "--sizes")
@@ -376,6 +383,8 @@ int main(int argc, char** argv) {
             radius = value;
         else if (key == "--degree")
             degree = value;
+        else if (key == "--deflation-rings")
+            rings = value;
         else if (key == "--out")
             out = value;
         else {
@@ -384,10 +393,12 @@ int main(int argc, char** argv) {
         }
     }
     try {  // bad values fail here, before any run
-        mra_options_of(levels, radius, degree);
+        mra_options_of(levels, radius, degree, rings);
     } catch (const std::logic_error&) {  // std::stoi, std::stod
-        fmt::print(stderr, "--levels {} --radius {} --degree {}: expected numbers\n", levels,
-                   radius, degree);
+        fmt::print(stderr,
+                   "--levels {} --radius {} --degree {} --deflation-rings {}: expected numbers "
+                   "(--deflation-rings: or off)\n",
+                   levels, radius, degree, rings);
         return 2;
     } catch (const Error& e) {
         fmt::print(stderr, "{}\n", e.what());
@@ -402,8 +413,8 @@ int main(int argc, char** argv) {
             for (const std::string& contrast : split(contrasts))
                 for (const std::string& backend : split(backends)) {
                     const std::string cmd =
-                        fmt::format("{} --one {} {} {} {} {} {} {}", argv[0], backend, n, field,
-                                    contrast, levels, radius, degree);
+                        fmt::format("{} --one {} {} {} {} {} {} {} {}", argv[0], backend, n, field,
+                                    contrast, levels, radius, degree, rings);
                     std::FILE* pipe = popen(cmd.c_str(), "r");
                     std::string text;
                     char buffer[4096];
@@ -415,8 +426,8 @@ int main(int argc, char** argv) {
                     const nlohmann::json r = nlohmann::json::parse(text);
                     if (r.contains("error")) {
                         rows.push_back(fmt::format(
-                            "| {}^3 | {} | {} | - | {} | failed after {:.2f} GB peak: {} |||||||", n,
-                            field, contrast, backend, r["peak_gb"].get<double>(),
+                            "| {}^3 | {} | {} | - | {} | failed after {:.2f} GB peak: {} |||||||",
+                            n, field, contrast, backend, r["peak_gb"].get<double>(),
                             r["error"].get<std::string>()));
                         fmt::print("{}\n", rows.back());
                         continue;
@@ -426,7 +437,8 @@ int main(int argc, char** argv) {
                                                               r["iterations2"].get<int>())
                                                 : "-";
                     const std::string setup =
-                        backend == "mra-pcg" ? fmt::format("{:.2f} (build {:.2f}, {} levels, coarsest {})",
+                        backend == "mra-pcg"
+                            ? fmt::format("{:.2f} (build {:.2f}, {} levels, coarsest {})",
                                           r["setup_s"].get<double>(), r["build_s"].get<double>(),
                                           r["levels"].get<int>(), r["coarsest_dofs"].get<long>())
                             : fmt::format("{:.2f}", r["setup_s"].get<double>());

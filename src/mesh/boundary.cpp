@@ -77,10 +77,11 @@ void unite(std::vector<Index>& parent, Index a, Index b) {
     if (a != b) parent[std::max(a, b)] = std::min(a, b);
 }
 
-// Finds which local facets (flat id e * nf + lf) belong to exactly one element. Facets are
+// For each local facet (flat id e * nf + lf), the flat id of the same facet in the other
+// element that has it, or -1 if it belongs to one element only (a boundary facet). Facets are
 // bucketed by their smallest node (counting sort), then equal keys are found by sorting each
 // small bucket.
-std::vector<char> boundary_flags(const Mesh& mesh, const FacetTable& table) {
+std::vector<Index> facet_partners(const Mesh& mesh, const FacetTable& table) {
     const Index ne = mesh.num_elements();
     const Index nv = mesh.num_nodes();
     const int nf = static_cast<int>(table.facets.size());
@@ -98,7 +99,7 @@ std::vector<char> boundary_flags(const Mesh& mesh, const FacetTable& table) {
                 bucket[fill[facet_min_node(mesh, table, e, lf)]++] = e * nf + lf;
     }
 
-    std::vector<char> on_boundary(static_cast<size_t>(total), 1);
+    std::vector<Index> partner(static_cast<size_t>(total), -1);
     Index non_manifold = -1;  // a flat facet id shared by more than two elements
 #pragma omp parallel
     {
@@ -114,8 +115,10 @@ std::vector<char> boundary_flags(const Mesh& mesh, const FacetTable& table) {
             for (size_t i = 0; i < local.size();) {
                 size_t j = i + 1;
                 while (j < local.size() && local[j].first == local[i].first) ++j;
-                if (j - i > 1)
-                    for (size_t k = i; k < j; ++k) on_boundary[local[k].second] = 0;
+                if (j - i == 2) {
+                    partner[local[i].second] = local[i + 1].second;
+                    partner[local[i + 1].second] = local[i].second;
+                }
                 if (j - i > 2) {
 #pragma omp critical(coarsegrain_boundary_non_manifold)
                     non_manifold = std::max(non_manifold, local[i].second);
@@ -128,7 +131,20 @@ std::vector<char> boundary_flags(const Mesh& mesh, const FacetTable& table) {
               "boundary: facet {} of {} element {} is shared by more than two elements; the "
               "mesh must be conforming and manifold",
               non_manifold % nf, element_name(mesh.type), non_manifold / nf);
-    return on_boundary;
+    return partner;
+}
+
+// The checks of boundary and element_neighbours on the mesh's arrays.
+void verify_elements(const Mesh& mesh, const char* what) {
+    const int npe = nodes_per_element(mesh.type);
+    CG_VERIFY(mesh.elements.cols() == npe, "{}: {} elements need {} nodes, got {}", what,
+              element_name(mesh.type), npe, mesh.elements.cols());
+    if (mesh.num_elements() > 0) {
+        const Index lo = mesh.elements.minCoeff(), hi = mesh.elements.maxCoeff();
+        CG_VERIFY(lo >= 0 && hi < mesh.num_nodes(),
+                  "{}: elements refer to nodes {}..{}, but nodes are numbered 0..{}", what, lo, hi,
+                  mesh.num_nodes() - 1);
+    }
 }
 
 // Outward normals and measures of the facets.
@@ -218,29 +234,21 @@ void facet_components(const Mesh& mesh, Boundary& b) {
 
 Boundary boundary(const Mesh& mesh) {
     const FacetTable table = facet_table(mesh.type);
-    const int npe = nodes_per_element(mesh.type);
-    CG_VERIFY(mesh.elements.cols() == npe, "boundary: {} elements need {} nodes, got {}",
-              element_name(mesh.type), npe, mesh.elements.cols());
+    verify_elements(mesh, "boundary");
     CG_VERIFY(mesh.rest_positions.cols() == mesh.dim(),
               "boundary: a {} mesh needs {} coordinates per node, got {}", element_name(mesh.type),
               mesh.dim(), mesh.rest_positions.cols());
-    if (mesh.num_elements() > 0) {
-        const Index lo = mesh.elements.minCoeff(), hi = mesh.elements.maxCoeff();
-        CG_VERIFY(lo >= 0 && hi < mesh.num_nodes(),
-                  "boundary: elements refer to nodes {}..{}, but nodes are numbered 0..{}", lo, hi,
-                  mesh.num_nodes() - 1);
-    }
     const int nf = static_cast<int>(table.facets.size());
-    const std::vector<char> on_boundary = boundary_flags(mesh, table);
+    const std::vector<Index> partner = facet_partners(mesh, table);
 
-    const Index nb = static_cast<Index>(std::count(on_boundary.begin(), on_boundary.end(), 1));
+    const Index nb = static_cast<Index>(std::count(partner.begin(), partner.end(), Index{-1}));
     Boundary b;
     b.facets.resize(nb, table.nodes);
     b.owner.resize(nb);
     b.local_facet.resize(nb);
     Index k = 0;
-    for (size_t f = 0; f < on_boundary.size(); ++f) {
-        if (!on_boundary[f]) continue;
+    for (size_t f = 0; f < partner.size(); ++f) {
+        if (partner[f] >= 0) continue;
         const Index e = static_cast<Index>(f / nf);
         const int lf = static_cast<int>(f % nf);
         b.owner[k] = e;
@@ -252,6 +260,17 @@ Boundary boundary(const Mesh& mesh) {
     facet_geometry(mesh, b);
     facet_components(mesh, b);
     return b;
+}
+
+IndexMatrix element_neighbours(const Mesh& mesh) {
+    const FacetTable table = facet_table(mesh.type);
+    verify_elements(mesh, "element_neighbours");
+    const Index nf = static_cast<Index>(table.facets.size());
+    const std::vector<Index> partner = facet_partners(mesh, table);
+    IndexMatrix neighbours(mesh.num_elements(), nf);
+    for (Index f = 0; f < static_cast<Index>(partner.size()); ++f)
+        neighbours(f / nf, f % nf) = partner[f] < 0 ? -1 : partner[f] / nf;
+    return neighbours;
 }
 
 std::vector<Index> boundary_nodes(const Boundary& b, Index component) {

@@ -7,7 +7,9 @@
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/progress.hpp"
+#include "coarsegrain/fem/stiff_clusters.hpp"
 #include "coarsegrain/mra/automatic_levels.hpp"
+#include "coarsegrain/solve/deflation.hpp"
 
 namespace coarsegrain::mra {
 
@@ -57,6 +59,8 @@ void validate(const PreconditionerOptions& o) {
               o.radius);
     CG_VERIFY(o.smoother_degree >= 1 && o.smoother_degree <= 10,
               "solver.smoother_degree = {}: expected 1..10", o.smoother_degree);
+    CG_VERIFY(o.deflation_rings >= 0 && o.deflation_rings <= kMaxDeflationRings,
+              "solver.deflation_rings = {}: expected 0..{}", o.deflation_rings, kMaxDeflationRings);
 }
 
 int preconditioner_levels(const Eigen::Vector3i& cells, int dim,
@@ -207,6 +211,7 @@ Vector MultigridPreconditioner::apply(const Vector& r) const {
 }
 
 solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& fine,
+                                                      const material::ElementMaterials& materials,
                                                       std::vector<Index> fixed_dofs,
                                                       const PreconditionerOptions& options) {
     Options o;
@@ -216,25 +221,44 @@ solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& fine,
     o.store_wavelet_stiffness = false;
     auto mesh = std::make_shared<const mesh::Mesh>(fine);
     auto fixed = std::make_shared<const std::vector<Index>>(std::move(fixed_dofs));
-    const int degree = options.smoother_degree;
-    return
-        [mesh, fixed, o, degree](const SparseMatrix& A) -> std::unique_ptr<solve::Preconditioner> {
-            Hierarchy h;
-            if (mesh->grid) {
-                const Phase phase("mra-pcg: hierarchy");
-                h = build_hierarchy_free(*mesh, A, *fixed, o);
-            } else {
-                std::vector<mesh::Mesh> levels;
-                {
-                    const Phase phase("mra-pcg: levels");
-                    levels = automatic_level_meshes(*mesh, o.levels);
-                }
-                const Phase phase("mra-pcg: hierarchy");
-                h = build_hierarchy_free(levels, *mesh, A, *fixed, o);
+    auto clusters = std::make_shared<const fem::StiffClusters>(
+        options.deflation ? fem::stiff_clusters(fine, materials, kDeflationContrast)
+                          : fem::StiffClusters{});
+    const int degree = options.smoother_degree, rings = options.deflation_rings;
+    return [mesh, fixed, clusters, o, degree,
+            rings](const SparseMatrix& A) -> std::unique_ptr<solve::Preconditioner> {
+        Hierarchy h;
+        if (mesh->grid) {
+            const Phase phase("mra-pcg: hierarchy");
+            h = build_hierarchy_free(*mesh, A, *fixed, o);
+        } else {
+            std::vector<mesh::Mesh> levels;
+            {
+                const Phase phase("mra-pcg: levels");
+                levels = automatic_level_meshes(*mesh, o.levels);
             }
+            const Phase phase("mra-pcg: hierarchy");
+            h = build_hierarchy_free(levels, *mesh, A, *fixed, o);
+        }
+        std::unique_ptr<solve::Preconditioner> cycle;
+        {
             const Phase phase("mra-pcg: cycle");
-            return std::make_unique<MultigridPreconditioner>(std::move(h), A, degree);
-        };
+            cycle = std::make_unique<MultigridPreconditioner>(std::move(h), A, degree);
+        }
+        if (clusters->count == 0) return cycle;
+        const Phase phase("mra-pcg: deflation");
+        SparseMatrix Z = fem::cluster_rigid_modes(*mesh, *clusters, A, *fixed, rings);
+        if (Z.cols() == 0) return cycle;
+        return std::make_unique<solve::DeflatedPreconditioner>(A, std::move(cycle), std::move(Z));
+    };
+}
+
+const MultigridPreconditioner& multigrid_cycle(const solve::Preconditioner& M) {
+    if (const auto* deflated = dynamic_cast<const solve::DeflatedPreconditioner*>(&M))
+        return multigrid_cycle(deflated->base());
+    const auto* cycle = dynamic_cast<const MultigridPreconditioner*>(&M);
+    CG_VERIFY(cycle != nullptr, "mra-pcg: the preconditioner is not the hierarchy's cycle");
+    return *cycle;
 }
 
 }  // namespace coarsegrain::mra

@@ -346,7 +346,7 @@ constexpr double kIterativeTolerance = 1e-8;
 /// hierarchy (Scene::preconditioner).
 void parse_solver(const JsonReader& sv, Scene& s) {
     sv.allow_only({"backend", "tolerance", "max_iterations", "time_limit", "levels", "radius",
-                   "smoother_degree"});
+                   "smoother_degree", "deflation", "deflation_rings"});
     if (auto b = sv.find("backend")) {
         try {
             s.solver.backend = solve::parse_backend(b->string());
@@ -385,6 +385,9 @@ void parse_solver(const JsonReader& sv, Scene& s) {
     }
     if (auto v = only_pcg("smoother_degree"))
         s.preconditioner.smoother_degree = static_cast<int>(v->integer(1, 10));
+    if (auto v = only_pcg("deflation")) s.preconditioner.deflation = v->boolean();
+    if (auto v = only_pcg("deflation_rings"))
+        s.preconditioner.deflation_rings = static_cast<int>(v->integer(0, mra::kMaxDeflationRings));
 }
 
 /// mra-pcg solves the linear fine model of a grid whose cells halve, or of linear triangles or
@@ -654,8 +657,8 @@ Vector load_vector(const Scene& scene, const mesh::Mesh& mesh,
 solve::SolverOptions fine_solver(const Scene& scene, const FineModel& model) {
     solve::SolverOptions o = scene.solver;
     if (o.backend == solve::Backend::MraPcg)
-        o.preconditioner =
-            mra::hierarchy_preconditioner(model.mesh, model.bc.dofs, scene.preconditioner);
+        o.preconditioner = mra::hierarchy_preconditioner(model.mesh, model.materials, model.bc.dofs,
+                                                         scene.preconditioner);
     return o;
 }
 

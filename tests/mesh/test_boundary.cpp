@@ -242,3 +242,41 @@ TEST(Boundary, LargeTetGridIsFast) {
     EXPECT_EQ(b.num_components, 1);
     EXPECT_LT(seconds, 3.0);
 }
+
+namespace coarsegrain {
+namespace {
+
+// element_neighbours: the relation is symmetric, neighbours share a whole facet, and the facets
+// without a neighbour are exactly the boundary's.
+TEST(ElementNeighbours, SymmetricThroughWholeFacetsAndBoundaryElsewhere) {
+    for (const mesh::ElementType type : {mesh::ElementType::Tri3, mesh::ElementType::Quad4,
+                                         mesh::ElementType::Tet4, mesh::ElementType::Hex8}) {
+        const int dim = mesh::element_dim(type);
+        const mesh::Mesh m =
+            mesh::make_grid(type, Eigen::VectorXd::Zero(dim), Eigen::VectorXd::Ones(dim),
+                            Eigen::VectorXi::Constant(dim, 3));
+        const IndexMatrix n = mesh::element_neighbours(m);
+        ASSERT_EQ(n.rows(), m.num_elements());
+        const int facet_nodes = type == mesh::ElementType::Hex8   ? 4
+                                : type == mesh::ElementType::Tet4 ? 3
+                                                                  : 2;
+        Index open = 0;
+        for (Index e = 0; e < n.rows(); ++e)
+            for (Index f = 0; f < n.cols(); ++f) {
+                const Index o = n(e, f);
+                if (o < 0) {
+                    ++open;
+                    continue;
+                }
+                EXPECT_TRUE((n.row(o).array() == e).any()) << mesh::element_name(type);
+                int shared = 0;
+                for (Index a = 0; a < m.elements.cols(); ++a)
+                    shared += (m.elements.row(o).array() == m.elements(e, a)).any();
+                EXPECT_EQ(shared, facet_nodes) << mesh::element_name(type);
+            }
+        EXPECT_EQ(open, mesh::boundary(m).size()) << mesh::element_name(type);
+    }
+}
+
+}  // namespace
+}  // namespace coarsegrain

@@ -34,9 +34,11 @@ TEST(SolverOptions, MraPcgKeysAndDefaults) {
     EXPECT_EQ(sc.solver.backend, solve::Backend::MraPcg);
     EXPECT_EQ(sc.solver.cg_tolerance, 1e-8);
     EXPECT_EQ(sc.preconditioner.levels, 0);
+    EXPECT_TRUE(sc.preconditioner.deflation);
+    EXPECT_EQ(sc.preconditioner.deflation_rings, 2);
     j["solver"] = {{"backend", "mra-pcg"}, {"tolerance", 1e-10}, {"max_iterations", 50},
                    {"time_limit", 60},     {"levels", 3},        {"radius", 2},
-                   {"smoother_degree", 4}};
+                   {"smoother_degree", 4}, {"deflation", false}, {"deflation_rings", 5}};
     sc = parse(j);
     EXPECT_EQ(sc.solver.cg_tolerance, 1e-10);
     EXPECT_EQ(sc.solver.cg_max_iterations, 50);
@@ -44,6 +46,8 @@ TEST(SolverOptions, MraPcgKeysAndDefaults) {
     EXPECT_EQ(sc.preconditioner.levels, 3);
     EXPECT_EQ(sc.preconditioner.radius, 2);
     EXPECT_EQ(sc.preconditioner.smoother_degree, 4);
+    EXPECT_FALSE(sc.preconditioner.deflation);
+    EXPECT_EQ(sc.preconditioner.deflation_rings, 5);
     // cholmod keeps its options; a direct solver serves everything but the fine model
     EXPECT_EQ(scene::direct_solver(sc).backend, solve::Backend::Cholmod);
     EXPECT_EQ(parse(checker_plate()).solver.cg_tolerance, solve::SolverOptions{}.cg_tolerance);
@@ -63,6 +67,9 @@ TEST(SolverOptions, MraPcgIsCheckedBeforeAnyWork) {
     expect([](json& j) { j["solver"]["radius"] = 0.5; }, "solver.radius");
     expect([](json& j) { j["solver"]["tolerance"] = 2; }, "solver.tolerance");
     expect([](json& j) { j["solver"]["smoother_degree"] = 0; }, "solver.smoother_degree");
+    expect([](json& j) { j["solver"]["deflation"] = 1; }, "solver.deflation");
+    expect([](json& j) { j["solver"]["deflation_rings"] = 17; }, "solver.deflation_rings");
+    expect([](json& j) { j["solver"]["deflation_rings"] = -1; }, "solver.deflation_rings");
     expect([](json& j) { j["kinematics"] = "corotational"; }, "corotated kinematics");
     expect(
         [](json& j) {

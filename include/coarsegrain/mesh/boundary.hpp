@@ -47,6 +47,11 @@ struct Boundary {
 ///         two elements (a non-manifold mesh)
 Boundary boundary(const Mesh& mesh);
 
+/// The element across each facet (face in 3D, edge in 2D; local numbering as Boundary's): #E by
+/// facets per element, -1 where the facet is on the boundary. Matched as boundary() does.
+/// @throws Error as boundary() on bad element arrays or a non-manifold mesh
+IndexMatrix element_neighbours(const Mesh& mesh);
+
 /// Sorted list of the nodes on the boundary (optionally only those of one component; -1 means
 /// all). @throws Error if component is not -1 or in [0, b.num_components)
 std::vector<Index> boundary_nodes(const Boundary& b, Index component = -1);

@@ -213,10 +213,26 @@ struct PreconditionerOptions {
     double radius = 1;
     /// Degree of the Chebyshev smoothing polynomial, before and after the coarse correction.
     int smoother_degree = 3;
+    /// Deflate the V-cycle by the rigid motions of the stiff clusters (fem/stiff_clusters.hpp,
+    /// elements at least kDeflationContrast times as stiff as the softest material;
+    /// solve/deflation.hpp): what a radius-1 basis misses at high contrast. No effect on a model
+    /// without such clusters.
+    bool deflation = true;
+    /// Rings of the fine mesh over which the clusters' rigid motions are extended into the soft
+    /// material (fem::cluster_rigid_modes; 0: none).
+    int deflation_rings = 2;
 };
 
+/// Stiffness ratio to the softest material from which the elements of a material form the
+/// stiff clusters that mra-pcg deflates: the contrast from which a Jacobi-preconditioned CG
+/// slows by an order of magnitude against contrast 1.
+inline constexpr double kDeflationContrast = 10;
+
+/// Largest PreconditionerOptions::deflation_rings.
+inline constexpr int kMaxDeflationRings = 16;
+
 /// Checks the options' ranges: levels 0 or in 2..kMaxLevels, coarsest_dofs >= 1, radius >= 1
-/// (finite), smoother_degree in 1..10.
+/// (finite), smoother_degree in 1..10, deflation_rings in 0..kMaxDeflationRings.
 /// @throws Error naming the option
 void validate(const PreconditionerOptions& options);
 

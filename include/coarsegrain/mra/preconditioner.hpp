@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
 #include "coarsegrain/mra/hierarchy.hpp"
 #include "coarsegrain/solve/pcg.hpp"
@@ -76,13 +77,23 @@ class MultigridPreconditioner : public solve::Preconditioner {
 /// correction; B^k dropped once used, Options::store_wavelet_stiffness) and the V-cycle. On a
 /// grid the levels are its nested grids; on triangles or tetrahedra they are the automatic
 /// level meshes (made at each call, phase "mra-pcg: levels"), the localized regions rings of
-/// the finer level's node graph. Phases "mra-pcg: hierarchy" and "mra-pcg: cycle".
+/// the finer level's node graph. With options.deflation and stiff clusters in `materials`
+/// (found once, here), the cycle is deflated by their rigid motions extended over
+/// options.deflation_rings rings (solve::DeflatedPreconditioner around the cycle). Phases
+/// "mra-pcg: hierarchy", "mra-pcg: cycle" and "mra-pcg: deflation".
 /// @param fine        the fine mesh, a grid (mesh::make_grid) or simplicial; copied
+/// @param materials   the fine model's element materials (read here only)
 /// @param fixed_dofs  the Dirichlet DOFs, sorted
-/// @throws Error if preconditioner_levels does; (when called) if the matrix is not #free DOFs
-///         square, or as automatic_level_meshes and build_hierarchy
+/// @throws Error if preconditioner_levels or fem::stiff_clusters does; (when called) if the
+///         matrix is not #free DOFs square, or as automatic_level_meshes and build_hierarchy
 solve::PreconditionerFactory hierarchy_preconditioner(const mesh::Mesh& fine,
+                                                      const material::ElementMaterials& materials,
                                                       std::vector<Index> fixed_dofs,
                                                       const PreconditionerOptions& options);
+
+/// The V-cycle inside a preconditioner made by hierarchy_preconditioner (itself, or the base of
+/// its deflation).
+/// @throws Error if M is neither
+const MultigridPreconditioner& multigrid_cycle(const solve::Preconditioner& M);
 
 }  // namespace coarsegrain::mra
