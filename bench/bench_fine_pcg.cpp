@@ -465,11 +465,11 @@ int main(int argc, char** argv) {
             "right-hand side. Residual: ||f - K u|| / ||f|| of the first answer, computed apart. "
             "Peak GB: the process's peak resident memory (each configuration runs in its own "
             "process). Regenerate with\n\n"
-            "    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 build/release/bench/bench_fine_pcg "
+            "    OMP_NUM_THREADS=2 OPENBLAS_NUM_THREADS=2 build/release/bench/bench_fine_pcg "
             "--sizes "
          << sizes << " --fields " << fields << " --contrasts " << contrasts << " --backends "
          << backends << " --levels " << levels << " --radius " << radius << " --degree " << degree
-         << "\n\n";
+         << " --deflation-rings " << rings << "\n\n";
     for (const std::string& row : rows) file << row << "\n";
     fmt::print(stderr, "wrote {}\n", out);
     return 0;

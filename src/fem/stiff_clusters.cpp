@@ -68,6 +68,37 @@ struct Scratch {
     std::vector<Index> seen;      ///< node -> last cluster that reached it
 };
 
+/// The free DOFs of the nodes within `rings` rings of `nodes` through nodes of no cluster
+/// (breadth first over the node graph), sorted; seen[v] == c marks the nodes reached.
+std::vector<Index> ring_dofs(const std::vector<Index>& nodes, const std::vector<char>& in_cluster,
+                             const detail::NodeGraph& graph,
+                             const std::vector<Index>& free_position, int dim, int rings, Index c,
+                             std::vector<Index>& seen) {
+    std::vector<Index> front = nodes, reached;
+    for (const Index v : nodes) seen[static_cast<size_t>(v)] = c;
+    for (int ring = 0; ring < rings && !front.empty(); ++ring) {
+        std::vector<Index> next;
+        for (const Index v : front)
+            for (Index i = graph.ptr[static_cast<size_t>(v)];
+                 i < graph.ptr[static_cast<size_t>(v) + 1]; ++i) {
+                const Index w = graph.adj[static_cast<size_t>(i)];
+                if (seen[static_cast<size_t>(w)] == c || in_cluster[static_cast<size_t>(w)] > 0)
+                    continue;
+                seen[static_cast<size_t>(w)] = c;
+                next.push_back(w);
+            }
+        reached.insert(reached.end(), next.begin(), next.end());
+        front = std::move(next);
+    }
+    std::vector<Index> dofs;
+    for (const Index v : reached)
+        for (int d = 0; d < dim; ++d)
+            if (const Index p = free_position[static_cast<size_t>(dim * v + d)]; p >= 0)
+                dofs.push_back(p);
+    std::sort(dofs.begin(), dofs.end());
+    return dofs;
+}
+
 /// The columns of one cluster as triplets (free DOF, local column, value).
 std::vector<Eigen::Triplet<double>> cluster_columns(
     const mesh::Mesh& mesh, const std::vector<Index>& nodes, const std::vector<char>& in_cluster,
@@ -102,30 +133,9 @@ std::vector<Eigen::Triplet<double>> cluster_columns(
                 out.emplace_back(dofs[static_cast<size_t>(r)], j, U(r, j));
     if (rings == 0) return out;
 
-    // The rings around the cluster through nodes of no cluster, breadth first.
-    std::vector<Index> front = nodes, shell;
-    for (const Index v : nodes) s.seen[static_cast<size_t>(v)] = c;
-    for (int ring = 0; ring < rings && !front.empty(); ++ring) {
-        std::vector<Index> next;
-        for (const Index v : front)
-            for (Index i = graph.ptr[static_cast<size_t>(v)];
-                 i < graph.ptr[static_cast<size_t>(v) + 1]; ++i) {
-                const Index w = graph.adj[static_cast<size_t>(i)];
-                if (s.seen[static_cast<size_t>(w)] == c || in_cluster[static_cast<size_t>(w)] > 0)
-                    continue;
-                s.seen[static_cast<size_t>(w)] = c;
-                next.push_back(w);
-            }
-        shell.insert(shell.end(), next.begin(), next.end());
-        front = std::move(next);
-    }
-    std::vector<Index> interior;
-    for (const Index v : shell)
-        for (int d = 0; d < dim; ++d)
-            if (const Index p = free_position[static_cast<size_t>(dim * v + d)]; p >= 0)
-                interior.push_back(p);
+    const std::vector<Index> interior =
+        ring_dofs(nodes, in_cluster, graph, free_position, dim, rings, c, s.seen);
     if (interior.empty()) return out;
-    std::sort(interior.begin(), interior.end());
     const Index ni = static_cast<Index>(interior.size());
     for (Index i = 0; i < ni; ++i)
         s.interior[static_cast<size_t>(interior[static_cast<size_t>(i)])] = i;
