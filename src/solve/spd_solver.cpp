@@ -553,7 +553,8 @@ struct SpdSolver::Impl {
         CG_VERIFY(bytes <= limit,
                   "solver ({}): the factor of the n = {} matrix ({} stored entries) would take "
                   "{:.3g} GB, more than the {:.3g} GB {}; make the system smaller (e.g. more "
-                  "coarsening levels) or the memory larger",
+                  "coarsening levels) or the memory larger, or solve a fine model iteratively "
+                  "(\"solver\": {{\"backend\": \"mra-pcg\"}})",
                   name(), n, nnz, bytes / 1e9, limit / 1e9,
                   given ? "allowed (max_factor_bytes)" : "available (MemAvailable)");
     }
@@ -674,7 +675,8 @@ void SpdSolver::analyze(const SparseMatrix& A) {
             }
             CG_VERIFY(s.cholmod->has_factor() && s.cholmod->status() >= 0,
                       "solver (cholmod): symbolic analysis of an n = {} matrix with {} nonzeros "
-                      "failed (CHOLMOD status {}; out of memory?)",
+                      "failed (CHOLMOD status {}; out of memory? a fine model can be solved "
+                      "iteratively: \"solver\": {{\"backend\": \"mra-pcg\"}})",
                       s.n, s.nnz, s.cholmod->status());
             if (ordering.empty()) ordering = ordering_name(s.cholmod->selected_ordering());
             s.stats = {ordering, s.cholmod->factor_nonzeros(), s.cholmod->factor_flops()};

@@ -375,6 +375,7 @@ TEST(SpdSolver, FactorLargerThanTheMemoryLimitIsRefused) {
         solve::SpdSolver refusing(small);
         test::expect_error([&] { refusing.compute(*A); },
                            "GB allowed (max_factor_bytes); make the system smaller");
+        test::expect_error([&] { refusing.compute(*A); }, R"("backend": "mra-pcg")");
         solve::SolverOptions large;
         large.max_factor_bytes = 1e9;
         solve::SpdSolver solver(large);
