@@ -171,14 +171,15 @@ std::vector<Eigen::Triplet<double>> cluster_columns(
     return out;
 }
 
-}  // namespace
-
+/// The largest eigenvalue of m's elasticity tensor in dimension dim.
 double stiffness_scale(const material::Material& m, int dim) {
     const Matrix C = material::tensor(m, dim);
     return Eigen::SelfAdjointEigenSolver<Matrix>(C, Eigen::EigenvaluesOnly)
         .eigenvalues()
         .maxCoeff();
 }
+
+}  // namespace
 
 StiffClusters stiff_clusters(const mesh::Mesh& mesh, const material::ElementMaterials& materials,
                              double contrast) {

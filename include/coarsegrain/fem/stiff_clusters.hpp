@@ -19,15 +19,12 @@ struct StiffClusters {
     Index count = 0;
 };
 
-/// The stiffness of a material by which clusters are told apart: the largest eigenvalue of its
-/// elasticity tensor in dimension dim (3 lambda + 2 mu for an isotropic 3D material).
-double stiffness_scale(const material::Material& m, int dim);
-
 /// The stiff clusters: connected components, through shared facets (mesh::element_neighbours),
-/// of the elements of one material whose stiffness_scale is at least `contrast` times that of
-/// the softest material of the mesh. Numbered by their first element. None when every material
-/// is within `contrast` of the softest (a homogeneous model has none).
-/// @throws Error if contrast < 1 or is not finite, or the materials do not match the mesh
+/// of the elements of one material whose stiffness (the largest eigenvalue of its elasticity
+/// tensor: 3 lambda + 2 mu for an isotropic 3D material with nu >= 0) is at least `contrast`
+/// times that of the softest material of the mesh. Numbered by their first element. None when
+/// every material is within `contrast` of the softest (a homogeneous model has none).
+/// @throws Error if contrast <= 1 or is not finite, or the materials do not match the mesh
 StiffClusters stiff_clusters(const mesh::Mesh& mesh, const material::ElementMaterials& materials,
                              double contrast);
 
