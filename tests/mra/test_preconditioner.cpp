@@ -97,8 +97,8 @@ TEST(MraPcg, IterationsBoundedAsTheGridDoubles) {
     EXPECT_LE(iterations.back(), iterations.front());
 }
 
-/// Stiff balls of radius 0.15 at the centres of the 8 octants: isolated inclusions 2.4 fine cells
-/// wide per 16 cells, each spanning several coarse cells.
+/// Stiff balls of radius 0.15 at the centres of the 8 octants (discs in 2D): isolated inclusions
+/// 4.8 cells wide on a 16^3 grid, each spanning several coarse cells.
 int octant_balls(const Eigen::VectorXd& x) {
     Eigen::VectorXd centre(x.size());
     for (int d = 0; d < x.size(); ++d) centre[d] = x[d] < 0.5 ? 0.25 : 0.75;
