@@ -65,23 +65,26 @@ void Dirichlet::fix_component(const std::vector<Index>& nodes, int dim, int comp
     merge(*this, std::move(added));
 }
 
-IndexVector free_dofs(Index n, const Dirichlet& bc) {
-    for (std::size_t k = 0; k < bc.dofs.size(); ++k) {
-        const Index d = bc.dofs[k];
+IndexVector free_dofs(Index n, const std::vector<Index>& fixed_dofs) {
+    for (std::size_t k = 0; k < fixed_dofs.size(); ++k) {
+        const Index d = fixed_dofs[k];
         CG_VERIFY(d >= 0 && d < n, "Dirichlet DOF {} out of range 0..{}", d, n - 1);
-        CG_VERIFY(k == 0 || bc.dofs[k - 1] < d,
-                  "Dirichlet DOFs must be sorted and unique, got {} after {}", d, bc.dofs[k - 1]);
+        CG_VERIFY(k == 0 || fixed_dofs[k - 1] < d,
+                  "Dirichlet DOFs must be sorted and unique, got {} after {}", d,
+                  fixed_dofs[k - 1]);
     }
-    IndexVector free(n - static_cast<Index>(bc.dofs.size()));
-    auto fixed = bc.dofs.begin();
+    IndexVector free(n - static_cast<Index>(fixed_dofs.size()));
+    auto fixed = fixed_dofs.begin();
     for (Index i = 0, next = 0; i < n; ++i) {
-        if (fixed != bc.dofs.end() && *fixed == i)
+        if (fixed != fixed_dofs.end() && *fixed == i)
             ++fixed;
         else
             free[next++] = i;
     }
     return free;
 }
+
+IndexVector free_dofs(Index n, const Dirichlet& bc) { return free_dofs(n, bc.dofs); }
 
 ReducedSystem reduce(const SparseMatrix& K, const Vector& f, const Dirichlet& bc) {
     const Index n = static_cast<Index>(K.rows());

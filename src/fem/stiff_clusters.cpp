@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <exception>
 #include <mutex>
-#include <numeric>
 
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/mesh/boundary.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 #include "mesh_graph.hpp"
@@ -20,11 +20,6 @@ namespace {
 /// directions the Dirichlet conditions remove (a cluster fixed along a line keeps its rotation
 /// about it).
 constexpr double kRankTolerance = 1e-8;
-
-Index find_root(std::vector<Index>& parent, Index a) {
-    while (parent[a] != a) a = parent[a] = parent[parent[a]];
-    return a;
-}
 
 /// The rigid motions of `nodes` about their centroid: dim * #nodes by dim(dim+1)/2
 /// (translations, then rotations: about z in 2D; about x, y, z in 3D), interleaved DOFs.
@@ -195,35 +190,17 @@ StiffClusters stiff_clusters(const mesh::Mesh& mesh, const material::ElementMate
         scale[t] = stiffness_scale(materials.table[t], mesh.dim());
         if (used[t]) softest = std::min(softest, scale[t]);
     }
-    const auto stiff = [&](Index e) {
-        return scale[static_cast<size_t>(materials.index[e])] >= contrast * softest;
-    };
-    StiffClusters result;
-    result.cluster = IndexVector::Constant(ne, -1);
-    if (std::none_of(used.begin(), used.end(), [](char u) { return u; })) return result;
+    IndexVector labels = IndexVector::Constant(ne, -1);
     bool any = false;
-    for (Index e = 0; e < ne && !any; ++e) any = stiff(e);
-    if (!any) return result;
-
-    const IndexMatrix neighbours = mesh::element_neighbours(mesh);
-    std::vector<Index> parent(static_cast<size_t>(ne));
-    std::iota(parent.begin(), parent.end(), Index{0});
     for (Index e = 0; e < ne; ++e) {
-        if (!stiff(e)) continue;
-        for (Index f = 0; f < neighbours.cols(); ++f) {
-            const Index n = neighbours(e, f);
-            if (n < 0 || materials.index[n] != materials.index[e]) continue;
-            const Index a = find_root(parent, e), b = find_root(parent, n);
-            if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);
-        }
+        const Index t = materials.index[e];
+        if (scale[static_cast<size_t>(t)] < contrast * softest) continue;
+        labels[e] = t;
+        any = true;
     }
-    std::vector<Index> number(static_cast<size_t>(ne), -1);
-    for (Index e = 0; e < ne; ++e) {
-        if (!stiff(e)) continue;
-        Index& n = number[static_cast<size_t>(find_root(parent, e))];
-        if (n < 0) n = result.count++;
-        result.cluster[e] = n;
-    }
+    StiffClusters result;
+    // A homogeneous model, or contrasts below `contrast`: no facet matching needed.
+    result.cluster = any ? mesh::element_components(mesh, labels, result.count) : labels;
     return result;
 }
 
@@ -235,21 +212,13 @@ SparseMatrix cluster_rigid_modes(const mesh::Mesh& mesh, const StiffClusters& cl
               "cluster_rigid_modes: clusters of {} elements for a mesh of {}",
               clusters.cluster.size(), mesh.num_elements());
     CG_VERIFY(rings >= 0, "cluster_rigid_modes: rings = {}: expected >= 0", rings);
-    CG_VERIFY(std::is_sorted(fixed_dofs.begin(), fixed_dofs.end()) &&
-                  std::adjacent_find(fixed_dofs.begin(), fixed_dofs.end()) == fixed_dofs.end() &&
-                  (fixed_dofs.empty() || (fixed_dofs.front() >= 0 && fixed_dofs.back() < nd)),
-              "cluster_rigid_modes: the fixed DOFs must be sorted, distinct and in 0..{}", nd - 1);
-    const Index nf = nd - static_cast<Index>(fixed_dofs.size());
+    const IndexVector free = free_dofs(nd, fixed_dofs);
+    const Index nf = free.size();
     CG_VERIFY(A_free.rows() == nf && A_free.cols() == nf,
               "cluster_rigid_modes: the operator is {}x{}, the free DOFs {}", A_free.rows(),
               A_free.cols(), nf);
     std::vector<Index> free_position(static_cast<size_t>(nd), -1);
-    for (Index dof = 0, next = 0, k = 0; dof < nd; ++dof) {
-        if (k < static_cast<Index>(fixed_dofs.size()) && fixed_dofs[static_cast<size_t>(k)] == dof)
-            ++k;
-        else
-            free_position[static_cast<size_t>(dof)] = next++;
-    }
+    for (Index i = 0; i < nf; ++i) free_position[static_cast<size_t>(free[i])] = i;
 
     // Nodes of each cluster, sorted; in_cluster counts the clusters of a node up to 2 (a node
     // shared by two clusters, whose elements meet along an edge, is listed by both).

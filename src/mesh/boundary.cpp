@@ -62,7 +62,7 @@ Index facet_min_node(const Mesh& mesh, const FacetTable& table, Index e, int lf)
     return m;
 }
 
-// Union-find with path halving over the nodes.
+// Union-find with path halving (over nodes or elements).
 Index find_root(std::vector<Index>& parent, Index v) {
     while (parent[v] != v) {
         parent[v] = parent[parent[v]];
@@ -271,6 +271,29 @@ IndexMatrix element_neighbours(const Mesh& mesh) {
     for (Index f = 0; f < static_cast<Index>(partner.size()); ++f)
         neighbours(f / nf, f % nf) = partner[f] < 0 ? -1 : partner[f] / nf;
     return neighbours;
+}
+
+IndexVector element_components(const Mesh& mesh, const IndexVector& labels, Index& count) {
+    const Index ne = mesh.num_elements();
+    CG_VERIFY(labels.size() == ne, "element_components: {} labels for {} elements", labels.size(),
+              ne);
+    const IndexMatrix neighbours = element_neighbours(mesh);
+    std::vector<Index> parent(static_cast<size_t>(ne));
+    std::iota(parent.begin(), parent.end(), Index{0});
+    for (Index e = 0; e < ne; ++e)
+        for (Index f = 0; labels[e] >= 0 && f < neighbours.cols(); ++f)
+            if (const Index n = neighbours(e, f); n >= 0 && labels[n] == labels[e])
+                unite(parent, e, n);
+    IndexVector component = IndexVector::Constant(ne, -1);
+    std::vector<Index> number(static_cast<size_t>(ne), -1);
+    count = 0;
+    for (Index e = 0; e < ne; ++e) {
+        if (labels[e] < 0) continue;
+        Index& n = number[static_cast<size_t>(find_root(parent, e))];
+        if (n < 0) n = count++;
+        component[e] = n;
+    }
+    return component;
 }
 
 std::vector<Index> boundary_nodes(const Boundary& b, Index component) {

@@ -278,5 +278,22 @@ TEST(ElementNeighbours, SymmetricThroughWholeFacetsAndBoundaryElsewhere) {
     }
 }
 
+// element_components joins facet neighbours of equal label only: a strip of 5 quads labelled
+// 0 0 -1 0 1 has the components {0, 1}, {3} and {4}.
+TEST(ElementComponents, FacetNeighboursOfOneLabel) {
+    const mesh::Mesh m = mesh::make_grid(mesh::ElementType::Quad4, Eigen::Vector2d::Zero(),
+                                         Eigen::Vector2d(5, 1), Eigen::Vector2i(5, 1));
+    IndexVector labels(5);
+    labels << 0, 0, -1, 0, 1;
+    Index count = 0;
+    const IndexVector c = mesh::element_components(m, labels, count);
+    EXPECT_EQ(count, 3);
+    IndexVector expected(5);
+    expected << 0, 0, -1, 1, 2;
+    EXPECT_EQ(c, expected);
+    test::expect_error([&] { mesh::element_components(m, IndexVector::Zero(4), count); },
+                       "4 labels for 5 elements");
+}
+
 }  // namespace
 }  // namespace coarsegrain

@@ -32,6 +32,9 @@ struct ReducedSystem {
 /// The DOFs of an n-DOF model that bc does not prescribe, ascending.
 /// @throws Error if bc.dofs is not sorted, unique and in 0..n-1
 IndexVector free_dofs(Index n, const Dirichlet& bc);
+/// The same for a sorted list of fixed DOFs.
+/// @throws Error if fixed is not sorted, unique and in 0..n-1
+IndexVector free_dofs(Index n, const std::vector<Index>& fixed);
 
 /// Eliminates the Dirichlet DOFs from K u = f in O(nnz(K)): K_ff is copied column by column
 /// (K must be compressed, both triangles stored) and only the prescribed columns are read for

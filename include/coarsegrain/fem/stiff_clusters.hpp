@@ -19,7 +19,7 @@ struct StiffClusters {
     Index count = 0;
 };
 
-/// The stiff clusters: connected components, through shared facets (mesh::element_neighbours),
+/// The stiff clusters: connected components, through shared facets (mesh::element_components),
 /// of the elements of one material whose stiffness (the largest eigenvalue of its elasticity
 /// tensor: 3 lambda + 2 mu for an isotropic 3D material with nu >= 0) is at least `contrast`
 /// times that of the softest material of the mesh. Numbered by their first element. None when

@@ -52,6 +52,15 @@ Boundary boundary(const Mesh& mesh);
 /// @throws Error as boundary() on bad element arrays or a non-manifold mesh
 IndexMatrix element_neighbours(const Mesh& mesh);
 
+/// Connected components of the elements with a label >= 0, two elements being connected when
+/// they share a facet and have the same label (element_neighbours).
+/// @param[in]  labels  #E label per element; < 0: in no component
+/// @param[out] count   the number of components
+/// @return #E component of each element, numbered 0..count-1 by their first element, -1 where
+///         the label is < 0
+/// @throws Error if labels has not #E entries, or as element_neighbours
+IndexVector element_components(const Mesh& mesh, const IndexVector& labels, Index& count);
+
 /// Sorted list of the nodes on the boundary (optionally only those of one component; -1 means
 /// all). @throws Error if component is not -1 or in [0, b.num_components)
 std::vector<Index> boundary_nodes(const Boundary& b, Index component = -1);
