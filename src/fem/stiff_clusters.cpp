@@ -65,7 +65,7 @@ struct Scratch {
 
 /// The free DOFs of the nodes within `rings` rings of `nodes` through nodes of no cluster
 /// (breadth first over the node graph), sorted; seen[v] == c marks the nodes reached.
-std::vector<Index> ring_dofs(const std::vector<Index>& nodes, const std::vector<char>& in_cluster,
+std::vector<Index> ring_dofs(const std::vector<Index>& nodes, const std::vector<int>& in_cluster,
                              const detail::NodeGraph& graph,
                              const std::vector<Index>& free_position, int dim, int rings, Index c,
                              std::vector<Index>& seen) {
@@ -94,34 +94,54 @@ std::vector<Index> ring_dofs(const std::vector<Index>& nodes, const std::vector<
     return dofs;
 }
 
-/// The columns of one cluster as triplets (free DOF, local column, value).
-std::vector<Eigen::Triplet<double>> cluster_columns(
-    const mesh::Mesh& mesh, const std::vector<Index>& nodes, const std::vector<char>& in_cluster,
-    const detail::NodeGraph& graph, const std::vector<Index>& free_position, const SparseMatrix& A,
-    int rings, Index c, Scratch& s, Index& columns) {
+/// A cluster's rigid motions over its nodes' DOFs (rows as rigid_motions; `dofs`: the free DOF
+/// of each row, -1 for a fixed one, whose row is zero), orthonormal, the directions the Dirichlet
+/// conditions remove dropped. No columns when its own nodes (in_cluster 1) do not carry every
+/// direction kept: the columns of all clusters kept are then linearly independent.
+Matrix rigid_basis(const mesh::Mesh& mesh, const std::vector<Index>& nodes,
+                   const std::vector<int>& in_cluster, const std::vector<Index>& dofs) {
     const int dim = mesh.dim();
     Matrix R = rigid_motions(mesh, nodes);
-    std::vector<Index> dofs;  // free DOF of each row of R, -1 for fixed ones
-    dofs.reserve(static_cast<size_t>(R.rows()));
-    for (const Index v : nodes)
-        for (int d = 0; d < dim; ++d)
-            dofs.push_back(free_position[static_cast<size_t>(dim * v + d)]);
     for (Index r = 0; r < R.rows(); ++r)
         if (dofs[static_cast<size_t>(r)] < 0) R.row(r).setZero();
     const Eigen::JacobiSVD<Matrix> svd(R, Eigen::ComputeThinU);
-    columns = rank(svd.singularValues());
-    std::vector<Eigen::Triplet<double>> out;
-    // The cluster's own nodes (in no other cluster) must carry every direction kept, so that the
-    // columns of all clusters are linearly independent.
+    const Index columns = rank(svd.singularValues());
     Matrix own = R;
     for (Index a = 0; a < static_cast<Index>(nodes.size()); ++a)
         if (in_cluster[static_cast<size_t>(nodes[static_cast<size_t>(a)])] > 1)
             own.middleRows(dim * a, dim).setZero();
-    if (columns == 0 || rank(Eigen::JacobiSVD<Matrix>(own).singularValues()) < columns) {
-        columns = 0;
-        return out;
-    }
-    const Matrix U = svd.matrixU().leftCols(columns);
+    if (columns == 0 || rank(Eigen::JacobiSVD<Matrix>(own).singularValues()) < columns)
+        return Matrix(R.rows(), 0);
+    return svd.matrixU().leftCols(columns);
+}
+
+/// The free DOF of each DOF of `nodes` (interleaved), -1 for fixed ones.
+std::vector<Index> node_free_dofs(const std::vector<Index>& nodes, int dim,
+                                  const std::vector<Index>& free_position) {
+    std::vector<Index> dofs;
+    dofs.reserve(nodes.size() * static_cast<size_t>(dim));
+    for (const Index v : nodes)
+        for (int d = 0; d < dim; ++d)
+            dofs.push_back(free_position[static_cast<size_t>(dim * v + d)]);
+    return dofs;
+}
+
+/// The columns of one cluster as triplets (free DOF, local column, value): its rigid basis U
+/// divided by m at a node of m clusters kept (`kept`), then extended over `rings` rings.
+std::vector<Eigen::Triplet<double>> cluster_columns(
+    const mesh::Mesh& mesh, const std::vector<Index>& nodes, Matrix U,
+    const std::vector<int>& in_cluster, const std::vector<int>& kept,
+    const detail::NodeGraph& graph, const std::vector<Index>& free_position, const SparseMatrix& A,
+    int rings, Index c, Scratch& s) {
+    const int dim = mesh.dim();
+    const Index columns = U.cols();
+    std::vector<Eigen::Triplet<double>> out;
+    if (columns == 0) return out;
+    const std::vector<Index> dofs = node_free_dofs(nodes, dim, free_position);
+    // Partition of unity over the nodes shared with other clusters.
+    for (Index a = 0; a < static_cast<Index>(nodes.size()); ++a)
+        if (const int m = kept[static_cast<size_t>(nodes[static_cast<size_t>(a)])]; m > 1)
+            U.middleRows(dim * a, dim) /= m;
     for (Index r = 0; r < U.rows(); ++r)
         if (dofs[static_cast<size_t>(r)] >= 0)
             for (Index j = 0; j < columns; ++j)
@@ -220,27 +240,37 @@ SparseMatrix cluster_rigid_modes(const mesh::Mesh& mesh, const StiffClusters& cl
     std::vector<Index> free_position(static_cast<size_t>(nd), -1);
     for (Index i = 0; i < nf; ++i) free_position[static_cast<size_t>(free[i])] = i;
 
-    // Nodes of each cluster, sorted; in_cluster counts the clusters of a node up to 2 (a node
-    // shared by two clusters, whose elements meet along an edge, is listed by both).
+    // Nodes of each cluster, sorted; in_cluster counts the clusters of each node (a node shared
+    // by clusters whose elements meet along an edge or at a corner is listed by each).
     std::vector<std::vector<Index>> nodes(static_cast<size_t>(clusters.count));
     for (Index e = 0; e < mesh.num_elements(); ++e)
         if (const Index c = clusters.cluster[e]; c >= 0)
             for (Index a = 0; a < mesh.elements.cols(); ++a)
                 nodes[static_cast<size_t>(c)].push_back(mesh.elements(e, a));
-    std::vector<char> in_cluster(static_cast<size_t>(nv), 0);
+    std::vector<int> in_cluster(static_cast<size_t>(nv), 0);
     for (auto& list : nodes) {
         std::sort(list.begin(), list.end());
         list.erase(std::unique(list.begin(), list.end()), list.end());
-        for (const Index v : list) {
-            char& count = in_cluster[static_cast<size_t>(v)];
-            count = static_cast<char>(std::min(count + 1, 2));
-        }
+        for (const Index v : list) ++in_cluster[static_cast<size_t>(v)];
     }
     const detail::NodeGraph graph =
         rings > 0 ? detail::node_graph(mesh, detail::node_elements(mesh)) : detail::NodeGraph{};
 
+    std::vector<Matrix> bases(static_cast<size_t>(clusters.count));
+    detail::parallel_for(clusters.count, [&](Index c) {
+        const std::vector<Index>& list = nodes[static_cast<size_t>(c)];
+        bases[static_cast<size_t>(c)] =
+            rigid_basis(mesh, list, in_cluster, node_free_dofs(list, mesh.dim(), free_position));
+    });
+    std::vector<int> kept(static_cast<size_t>(nv), 0);  // clusters with columns at each node
+    std::vector<Index> columns(static_cast<size_t>(clusters.count));
+    for (Index c = 0; c < clusters.count; ++c) {
+        columns[static_cast<size_t>(c)] = bases[static_cast<size_t>(c)].cols();
+        if (columns[static_cast<size_t>(c)] > 0)
+            for (const Index v : nodes[static_cast<size_t>(c)]) ++kept[static_cast<size_t>(v)];
+    }
+
     std::vector<std::vector<Eigen::Triplet<double>>> parts(static_cast<size_t>(clusters.count));
-    std::vector<Index> columns(static_cast<size_t>(clusters.count), 0);
     std::exception_ptr error;
     std::mutex mutex;
 #pragma omp parallel if (clusters.count > 1)
@@ -252,8 +282,8 @@ SparseMatrix cluster_rigid_modes(const mesh::Mesh& mesh, const StiffClusters& cl
         for (Index c = 0; c < clusters.count; ++c) {
             try {
                 parts[static_cast<size_t>(c)] = cluster_columns(
-                    mesh, nodes[static_cast<size_t>(c)], in_cluster, graph, free_position, A_free,
-                    rings, c, s, columns[static_cast<size_t>(c)]);
+                    mesh, nodes[static_cast<size_t>(c)], std::move(bases[static_cast<size_t>(c)]),
+                    in_cluster, kept, graph, free_position, A_free, rings, c, s);
             } catch (...) {
                 const std::lock_guard<std::mutex> lock(mutex);
                 if (!error) error = std::current_exception();

@@ -97,19 +97,35 @@ std::set<Index> cluster_nodes(const ClusterProblem& p, const fem::StiffClusters&
     return nodes;
 }
 
-TEST(StiffClusters, RigidMotionsOrthonormalPerCluster) {
+TEST(StiffClusters, RigidMotionsPerClusterFormAPartitionOfUnity) {
+    // 2 x 2 stiff blocks touching at corners: a block's corner nodes are shared with 1 to 3 others.
     const ClusterProblem p = cluster_problem(8, 1e3, checker_of(0.25));
     const fem::StiffClusters c = fem::stiff_clusters(p.mesh, p.materials, 10);
     const Matrix Z = Matrix(fem::cluster_rigid_modes(p.mesh, c, p.A, p.bc.dofs, 0));
     ASSERT_EQ(Z.cols(), 3 * c.count);  // no cluster touches the clamp at y = 0 with all nodes
+    const IndexVector free = fem::free_dofs(p.mesh.num_dofs(), p.bc);
+    Vector shared = Vector::Zero(free.size());  // the clusters at each free DOF's node
+    std::set<Index> all;
+    for (Index k = 0; k < c.count; ++k)
+        for (const Index v : cluster_nodes(p, c, k)) {
+            all.insert(v);
+            for (Index i = 0; i < free.size(); ++i) shared[i] += free[i] / 2 == v;
+        }
+    EXPECT_EQ(shared.maxCoeff(), 2);
     for (Index k = 0; k < c.count; ++k) {
-        const Matrix Zk = Z.middleCols(3 * k, 3);
+        // Undoing the division by the node's cluster count gives orthonormal columns that span
+        // the cluster's rigid motions and are zero off its nodes.
+        const Matrix Zk = shared.cwiseMax(1).asDiagonal() * Z.middleCols(3 * k, 3);
         EXPECT_LE((Zk.transpose() * Zk - Matrix::Identity(3, 3)).norm(), 1e-12);
-        // Its columns span the cluster's rigid motions and are zero off its nodes.
         const Matrix R = rigid_on(p, cluster_nodes(p, c, k));
         EXPECT_LE((R - Zk * (Zk.transpose() * R)).norm(), 1e-12 * R.norm()) << "cluster " << k;
         EXPECT_LE((Zk - R * R.colPivHouseholderQr().solve(Zk)).norm(), 1e-12) << "cluster " << k;
     }
+    // The body's rigid motions on all the clusters' nodes lie in the span: the division makes the
+    // columns a partition of unity where clusters touch.
+    const Matrix R = rigid_on(p, all);
+    const Matrix fit = Z * Z.colPivHouseholderQr().solve(R);
+    EXPECT_LE((R - fit).norm(), 1e-12 * R.norm());
 }
 
 TEST(StiffClusters, ExtensionIsEnergyMinimizingWithinTheRings) {

@@ -70,7 +70,7 @@ INSTANTIATE_TEST_SUITE_P(Grids, PcgMatchesCholmod,
                          });
 
 // Iterations to a 1e-8 residual on the 16^3 checkerboard (2 levels) as the contrast grows from
-// 1 to 1e3 and 1e6: 22, 21, 21 measured (22, 25, 25 without deflation). The adapted basis and the
+// 1 to 1e3 and 1e6: 22, 8, 8 measured (22, 25, 25 without deflation). The adapted basis and the
 // deflation carry the stiff cubes' near-rigid modes, so the count does not grow with the contrast
 // (a Jacobi-preconditioned CG needs about 30x more iterations at contrast 1e6 than at 1).
 TEST(MraPcg, IterationsBoundedInTheContrast) {
@@ -83,18 +83,20 @@ TEST(MraPcg, IterationsBoundedInTheContrast) {
     EXPECT_LE(iterations.back(), iterations.front() + 5);
 }
 
-// Iterations as the 2D grid doubles from 32^2 to 128^2 at contrast 1e3 (2 levels each at the
-// default coarsest size): 37, 26, 23 measured (60, 35, 27 without deflation), bounded and not
-// growing like the condition number (4x per doubling). The corner-touching stiff squares of the 2D
-// checkerboard are the hard case of a radius-1 basis: at contrast 1 the counts are 16, 19, 22.
+// Iterations as the 2D grid doubles from 32^2 to 128^2 (2 levels each at the default coarsest
+// size), at contrast 1 and 1e3: 16, 19, 22 and 13, 18, 20 measured (60, 35, 27 at 1e3 without
+// deflation, or with the corner-touching stiff squares' rigid motions deflated each in full where
+// they share nodes: 37, 26, 23). At high contrast the count is that of the homogeneous material,
+// whose growth over two doublings (1.4x) is far from the 4x of conjugate gradients without a
+// multigrid (the condition number grows 4x per doubling).
 TEST(MraPcg, IterationsBoundedAsTheGridDoubles) {
-    std::vector<int> iterations;
+    std::vector<int> homogeneous;
     for (const int n : {32, 64, 128}) {
-        const test::GridProblem p = checker_problem(2, n, 1e3);
-        iterations.push_back(pcg_solve(p, 1e-8).iterations);
+        homogeneous.push_back(pcg_solve(checker_problem(2, n, 1), 1e-8).iterations);
+        const int stiff = pcg_solve(checker_problem(2, n, 1e3), 1e-8).iterations;
+        EXPECT_LE(stiff, homogeneous.back() + 5) << n << "^2";
     }
-    for (const int it : iterations) EXPECT_LE(it, 70);
-    EXPECT_LE(iterations.back(), iterations.front());
+    EXPECT_LE(homogeneous.back(), 1.5 * homogeneous.front());
 }
 
 /// Stiff balls of radius 0.15 at the centres of the 8 octants (discs in 2D): isolated inclusions

@@ -34,10 +34,14 @@ StiffClusters stiff_clusters(const mesh::Mesh& mesh, const material::ElementMate
 /// SVD; directions with a singular value below 1e-8 of the largest, those the Dirichlet
 /// conditions remove, dropped; a cluster whose own nodes, those of no other cluster, do not
 /// carry every direction kept is skipped, e.g. a stiff element touching others at its corners,
-/// so that all columns are linearly independent), then extended over `rings` rings of the node
-/// graph around the cluster into nodes of no cluster by the energy-minimizing extension: A_free
-/// restricted to those nodes' free DOFs solved with the cluster's values as boundary data and zero
-/// beyond the rings and on the other clusters. rings = 0: zero outside the cluster's nodes.
+/// so that all columns are linearly independent), divided by m at a node of m clusters kept (a
+/// partition of unity over the shared nodes: any motion rigid on each cluster and continuous
+/// where they touch, such as a hinge of two stiff cubes meeting along an edge, lies in their
+/// span; without it, the checkerboard's edge-connected cubes need 3x the iterations), then
+/// extended over `rings` rings of the node graph around the cluster into nodes of no cluster by
+/// the energy-minimizing extension: A_free restricted to those nodes' free DOFs solved with the
+/// cluster's values as boundary data and zero beyond the rings and on the other clusters.
+/// rings = 0: zero outside the cluster's nodes.
 /// @param A_free  the operator on the free DOFs (both triangles), symmetric positive definite
 /// @return #free DOFs by (at most dim(dim+1)/2 per cluster) columns, a cluster's consecutive
 /// @throws Error if the sizes do not match, fixed_dofs is not sorted and in range, or rings < 0
