@@ -23,10 +23,12 @@
 //   OMP_NUM_THREADS=2 OPENBLAS_NUM_THREADS=2 build/release/bench/bench_fine_pcg
 //       [--sizes 32,48] [--contrasts 1e3,1e6] [--fields checker,spheres]
 //       [--backends cholmod,mra-pcg,amg] [--levels Q] [--radius R] [--degree D]
-//       [--deflation-rings N|off] [--out FILE]
+//       [--deflation-rings N|off] [--max-iterations N] [--out FILE]
 // (--levels, --radius, --degree, --deflation-rings: mra-pcg's solver.levels, solver.radius,
 // solver.smoother_degree and solver.deflation_rings, "off" for solver.deflation false; default
-// the scene's defaults: automatic levels, radius 1, degree 3, deflation over 2 rings.)
+// the scene's defaults: automatic levels, radius 1, degree 3, deflation over 2 rings.
+// --max-iterations: both iterative solvers' limit, default 1000; a BoomerAMG solve stopped by it
+// shows "(limit)" beside its iterations, and its residual is then above 1e-8; mra-pcg refuses.)
 #include <HYPRE.h>
 #include <HYPRE_parcsr_ls.h>
 #include <fmt/format.h>
@@ -126,10 +128,12 @@ class HypreVector {
 };
 
 /// hypre's PCG preconditioned by BoomerAMG set up for elasticity (see the file comment) on the
-/// free DOFs of `model` (K_ff, interleaved per node; every fixed node has all its DOFs fixed).
+/// free DOFs of `model` (K_ff, interleaved per node; every fixed node has all its DOFs fixed),
+/// stopping at 1e-8 or after max_iterations.
 class HypreAmg {
   public:
-    HypreAmg(const SparseMatrix& K, const scene::FineModel& model, const IndexVector& free) {
+    HypreAmg(const SparseMatrix& K, const scene::FineModel& model, const IndexVector& free,
+             int max_iterations) {
         const auto n = static_cast<HYPRE_BigInt>(K.rows());
         HYPRE_IJMatrixCreate(MPI_COMM_WORLD, 0, n - 1, 0, n - 1, &m_ij);
         HYPRE_IJMatrixSetObjectType(m_ij, HYPRE_PARCSR);
@@ -185,7 +189,7 @@ class HypreAmg {
         HYPRE_BoomerAMGSetPrintLevel(m_amg, 0);
         HYPRE_ParCSRPCGCreate(MPI_COMM_WORLD, &m_pcg);
         HYPRE_ParCSRPCGSetTol(m_pcg, 1e-8);
-        HYPRE_ParCSRPCGSetMaxIter(m_pcg, 1000);
+        HYPRE_ParCSRPCGSetMaxIter(m_pcg, max_iterations);
         HYPRE_ParCSRPCGSetTwoNorm(m_pcg, 1);
         HYPRE_ParCSRPCGSetLogging(m_pcg, 1);
         HYPRE_ParCSRPCGSetPrecond(m_pcg, HYPRE_BoomerAMGSolve, HYPRE_BoomerAMGSetup, m_amg);
@@ -226,12 +230,12 @@ class HypreAmg {
 /// One configuration in this process: a JSON line on stdout (with "error" if the solver refused
 /// or failed, e.g. CHOLMOD out of memory).
 int run_one(const std::string& backend, int n, const std::string& field, double contrast,
-            const mra::PreconditionerOptions& mra_options);
+            const mra::PreconditionerOptions& mra_options, int max_iterations);
 
 int run_one_caught(const std::string& backend, int n, const std::string& field, double contrast,
-                   const mra::PreconditionerOptions& mra_options) {
+                   const mra::PreconditionerOptions& mra_options, int max_iterations) {
     try {
-        return run_one(backend, n, field, contrast, mra_options);
+        return run_one(backend, n, field, contrast, mra_options, max_iterations);
     } catch (const std::exception& e) {
         const nlohmann::json out = {
             {"backend", backend}, {"error", e.what()}, {"peak_gb", peak_rss_gb()}};
@@ -241,7 +245,7 @@ int run_one_caught(const std::string& backend, int n, const std::string& field, 
 }
 
 int run_one(const std::string& backend, int n, const std::string& field, double contrast,
-            const mra::PreconditionerOptions& mra_options) {
+            const mra::PreconditionerOptions& mra_options, int max_iterations) {
     const scene::Scene sc = scene::parse_scene(cube_scene(n, field, contrast), "cube", "");
     nlohmann::json out = {{"backend", backend}, {"n", n}, {"field", field}, {"contrast", contrast}};
     auto t0 = Clock::now();
@@ -279,7 +283,7 @@ int run_one(const std::string& backend, int n, const std::string& field, double 
         out["nnz_L"] = s.factor_stats().nonzeros;
     } else if (backend == "amg") {
         t0 = Clock::now();
-        HypreAmg amg(sys.K, model, sys.free_dofs);
+        HypreAmg amg(sys.K, model, sys.free_dofs, max_iterations);
         int iterations = 0;
         double recurrence = 0;
         // BoomerAMG sets up in the first solve: timed apart with a zero right-hand side.
@@ -310,6 +314,7 @@ int run_one(const std::string& backend, int n, const std::string& field, double 
         out["coarsest_dofs"] = cycle.level_sizes().front().first;
         solve::PcgOptions pcg;
         pcg.tolerance = 1e-8;
+        pcg.max_iterations = max_iterations;
         solve::PcgReport report;
         t0 = Clock::now();
         const Vector u = solve::pcg(sys.K, sys.rhs, *M, pcg, &report);
@@ -350,23 +355,25 @@ mra::PreconditionerOptions mra_options_of(const std::string& levels, const std::
 }  // namespace
 
 int main(int argc, char** argv) {
-    if (argc == 10 && std::string(argv[1]) == "--one") {
+    if (argc == 11 && std::string(argv[1]) == "--one") {
         const mra::PreconditionerOptions mra_options =
             mra_options_of(argv[6], argv[7], argv[8], argv[9]);
+        const int max_iterations = std::atoi(argv[10]);
         if (std::string(argv[2]) != "amg")
             return run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]),
-                                  mra_options);
+                                  mra_options, max_iterations);
         MPI_Init(&argc, &argv);
         HYPRE_Init();
-        const int code =
-            run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]), mra_options);
+        const int code = run_one_caught(argv[2], std::atoi(argv[3]), argv[4], std::atof(argv[5]),
+                                        mra_options, max_iterations);
         HYPRE_Finalize();
         MPI_Finalize();
         return code;
     }
     std::string sizes = "32,48", contrasts = "1e3,1e6", fields = "checker,spheres",
                 backends = "cholmod,mra-pcg,amg", levels = "0", radius = "1", degree = "3",
-                rings = "2", out = std::string(COARSEGRAIN_SOURCE_DIR) + "/docs/fine_pcg_bench.md";
+                rings = "2", max_iterations = "1000",
+                out = std::string(COARSEGRAIN_SOURCE_DIR) + "/docs/fine_pcg_bench.md";
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string key = argv[i], value = argv[i + 1];
         if (key == "--sizes")
@@ -385,6 +392,8 @@ int main(int argc, char** argv) {
             degree = value;
         else if (key == "--deflation-rings")
             rings = value;
+        else if (key == "--max-iterations")
+            max_iterations = value;
         else if (key == "--out")
             out = value;
         else {
@@ -394,11 +403,15 @@ int main(int argc, char** argv) {
     }
     try {  // bad values fail here, before any run
         mra_options_of(levels, radius, degree, rings);
+        if (std::stoi(max_iterations) < 1) {
+            fmt::print(stderr, "--max-iterations {}: expected a positive count\n", max_iterations);
+            return 2;
+        }
     } catch (const std::logic_error&) {  // std::stoi, std::stod
         fmt::print(stderr,
-                   "--levels {} --radius {} --degree {} --deflation-rings {}: expected numbers "
-                   "(--deflation-rings: or off)\n",
-                   levels, radius, degree, rings);
+                   "--levels {} --radius {} --degree {} --deflation-rings {} --max-iterations "
+                   "{}: expected numbers (--deflation-rings: or off)\n",
+                   levels, radius, degree, rings, max_iterations);
         return 2;
     } catch (const Error& e) {
         fmt::print(stderr, "{}\n", e.what());
@@ -413,8 +426,8 @@ int main(int argc, char** argv) {
             for (const std::string& contrast : split(contrasts))
                 for (const std::string& backend : split(backends)) {
                     const std::string cmd =
-                        fmt::format("{} --one {} {} {} {} {} {} {} {}", argv[0], backend, n, field,
-                                    contrast, levels, radius, degree, rings);
+                        fmt::format("{} --one {} {} {} {} {} {} {} {} {}", argv[0], backend, n,
+                                    field, contrast, levels, radius, degree, rings, max_iterations);
                     std::FILE* pipe = popen(cmd.c_str(), "r");
                     std::string text;
                     char buffer[4096];
@@ -433,9 +446,14 @@ int main(int argc, char** argv) {
                         continue;
                     }
                     const bool pcg = backend != "cholmod";
-                    const std::string its = pcg ? fmt::format("{} / {}", r["iterations"].get<int>(),
-                                                              r["iterations2"].get<int>())
-                                                : "-";
+                    const auto count = [&](const char* key) {
+                        const int k = r[key].get<int>();
+                        return k == std::stoi(max_iterations) ? fmt::format("{} (limit)", k)
+                                                              : std::to_string(k);
+                    };
+                    const std::string its =
+                        pcg ? fmt::format("{} / {}", count("iterations"), count("iterations2"))
+                            : "-";
                     const std::string setup =
                         backend == "mra-pcg"
                             ? fmt::format("{:.2f} (build {:.2f}, {} levels, coarsest {})",
@@ -469,7 +487,7 @@ int main(int argc, char** argv) {
             "--sizes "
          << sizes << " --fields " << fields << " --contrasts " << contrasts << " --backends "
          << backends << " --levels " << levels << " --radius " << radius << " --degree " << degree
-         << " --deflation-rings " << rings << "\n\n";
+         << " --deflation-rings " << rings << " --max-iterations " << max_iterations << "\n\n";
     for (const std::string& row : rows) file << row << "\n";
     fmt::print(stderr, "wrote {}\n", out);
     return 0;
