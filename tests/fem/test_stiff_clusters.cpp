@@ -98,7 +98,7 @@ std::set<Index> cluster_nodes(const ClusterProblem& p, const fem::StiffClusters&
 }
 
 TEST(StiffClusters, RigidMotionsPerClusterFormAPartitionOfUnity) {
-    // 2 x 2 stiff blocks touching at corners: a block's corner nodes are shared with 1 to 3 others.
+    // 2 x 2 stiff blocks touching at corners: each shared node is the corner of two blocks.
     const ClusterProblem p = cluster_problem(8, 1e3, checker_of(0.25));
     const fem::StiffClusters c = fem::stiff_clusters(p.mesh, p.materials, 10);
     const Matrix Z = Matrix(fem::cluster_rigid_modes(p.mesh, c, p.A, p.bc.dofs, 0));
