@@ -417,6 +417,7 @@ int main(int argc, char** argv) {
         fmt::print(stderr, "{}\n", e.what());
         return 2;
     }
+    const int limit = std::stoi(max_iterations);
     std::vector<std::string> rows = {
         "| cube | field | contrast | DOFs | backend | set-up s | solve s | total s | 2nd rhs s | "
         "iterations | residual | peak GB |",
@@ -448,8 +449,7 @@ int main(int argc, char** argv) {
                     const bool pcg = backend != "cholmod";
                     const auto count = [&](const char* key) {
                         const int k = r[key].get<int>();
-                        return k == std::stoi(max_iterations) ? fmt::format("{} (limit)", k)
-                                                              : std::to_string(k);
+                        return k == limit ? fmt::format("{} (limit)", k) : std::to_string(k);
                     };
                     const std::string its =
                         pcg ? fmt::format("{} / {}", count("iterations"), count("iterations2"))

@@ -127,17 +127,17 @@ std::vector<Index> node_free_dofs(const std::vector<Index>& nodes, int dim,
 }
 
 /// The columns of one cluster as triplets (free DOF, local column, value): its rigid basis U
-/// divided by m at a node of m clusters kept (`kept`), then extended over `rings` rings.
+/// (rows over `dofs`, as rigid_basis) divided by m at a node of m clusters kept (`kept`), then
+/// extended over `rings` rings.
 std::vector<Eigen::Triplet<double>> cluster_columns(
-    const mesh::Mesh& mesh, const std::vector<Index>& nodes, Matrix U,
-    const std::vector<int>& in_cluster, const std::vector<int>& kept,
+    const mesh::Mesh& mesh, const std::vector<Index>& nodes, const std::vector<Index>& dofs,
+    Matrix U, const std::vector<int>& in_cluster, const std::vector<int>& kept,
     const detail::NodeGraph& graph, const std::vector<Index>& free_position, const SparseMatrix& A,
     int rings, Index c, Scratch& s) {
     const int dim = mesh.dim();
     const Index columns = U.cols();
     std::vector<Eigen::Triplet<double>> out;
     if (columns == 0) return out;
-    const std::vector<Index> dofs = node_free_dofs(nodes, dim, free_position);
     // Partition of unity over the nodes shared with other clusters.
     for (Index a = 0; a < static_cast<Index>(nodes.size()); ++a)
         if (const int m = kept[static_cast<size_t>(nodes[static_cast<size_t>(a)])]; m > 1)
@@ -256,11 +256,12 @@ SparseMatrix cluster_rigid_modes(const mesh::Mesh& mesh, const StiffClusters& cl
     const detail::NodeGraph graph =
         rings > 0 ? detail::node_graph(mesh, detail::node_elements(mesh)) : detail::NodeGraph{};
 
+    std::vector<std::vector<Index>> dofs(static_cast<size_t>(clusters.count));
     std::vector<Matrix> bases(static_cast<size_t>(clusters.count));
     detail::parallel_for(clusters.count, [&](Index c) {
-        const std::vector<Index>& list = nodes[static_cast<size_t>(c)];
-        bases[static_cast<size_t>(c)] =
-            rigid_basis(mesh, list, in_cluster, node_free_dofs(list, mesh.dim(), free_position));
+        const auto i = static_cast<size_t>(c);
+        dofs[i] = node_free_dofs(nodes[i], mesh.dim(), free_position);
+        bases[i] = rigid_basis(mesh, nodes[i], in_cluster, dofs[i]);
     });
     std::vector<int> kept(static_cast<size_t>(nv), 0);  // clusters with columns at each node
     std::vector<Index> columns(static_cast<size_t>(clusters.count));
@@ -282,8 +283,9 @@ SparseMatrix cluster_rigid_modes(const mesh::Mesh& mesh, const StiffClusters& cl
         for (Index c = 0; c < clusters.count; ++c) {
             try {
                 parts[static_cast<size_t>(c)] = cluster_columns(
-                    mesh, nodes[static_cast<size_t>(c)], std::move(bases[static_cast<size_t>(c)]),
-                    in_cluster, kept, graph, free_position, A_free, rings, c, s);
+                    mesh, nodes[static_cast<size_t>(c)], dofs[static_cast<size_t>(c)],
+                    std::move(bases[static_cast<size_t>(c)]), in_cluster, kept, graph,
+                    free_position, A_free, rings, c, s);
             } catch (...) {
                 const std::lock_guard<std::mutex> lock(mutex);
                 if (!error) error = std::current_exception();
