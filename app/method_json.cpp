@@ -53,7 +53,8 @@ nlohmann::json options_json(const mra::Options& o) {
             {"measurement", mra::measurement_name(o.measurement)},
             {"operator", mra::operator_name(o.fine_operator)},
             {"defect_tolerance", o.defect_tolerance},
-            {"max_radius", o.max_radius}};
+            {"max_radius", o.max_radius},
+            {"relaxation", o.relaxation}};
 }
 
 nlohmann::json level_build_json(const mra::LevelReport& L) {

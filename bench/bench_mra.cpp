@@ -5,6 +5,7 @@
 //   bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7]
 //             [radius_grid=fine|coarse] [refinement=linear|dirac] [patch=1|Nc (N clipped)]
 //             [scene=checker|FILE] [invariance=1|0] [localization=node|cell]
+//             [relaxation=0]
 //
 // scene "checker": the grid spans [0, NX/NY] x [0, 1] x [0, NZ/NY] (cubic cells), hung from its
 // face y = 1 under gravity and a traction on y = 0, with the checker inclusions of the hierarchy
@@ -109,7 +110,7 @@ int run(int argc, char** argv) {
             stderr,
             "usage: bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7] "
             "[radius_grid=fine|coarse] [refinement=linear|dirac] [patch=1|Nc (N clipped)] "
-            "[scene=checker|FILE] [invariance=1|0] [localization=node|cell]\n");
+            "[scene=checker|FILE] [invariance=1|0] [localization=node|cell] [relaxation=0]\n");
         return 2;
     }
     const Eigen::Vector3i cells(std::atoi(argv[1]), std::atoi(argv[2]), std::atoi(argv[3]));
@@ -136,6 +137,7 @@ int run(int argc, char** argv) {
     o.invariance = argc > 11 ? std::atoi(argv[11]) != 0 : true;
     o.localization = argc > 12 && std::string(argv[12]) == "cell" ? cg::mra::Localization::Cell
                                                                   : cg::mra::Localization::Node;
+    o.relaxation = argc > 13 ? std::atof(argv[13]) : 0.0;
     auto t0 = std::chrono::steady_clock::now();
     const cg::test::GridProblem p = make_problem(cells, scene);
     std::printf("%s grid %dx%dx%d: %ld nodes, %ld DOFs; problem set up in %.2f s, peak %.0f MB\n",
@@ -143,11 +145,11 @@ int run(int argc, char** argv) {
                 static_cast<long>(p.mesh.num_dofs()), since(t0), peak_mb());
     std::printf(
         "levels %d, %s refinement, radius %s (%s rings), patch %d%s, truncation %g, invariance "
-        "%d, localization %s\n",
+        "%d, localization %s, relaxation %g\n",
         o.levels, cg::mra::refinement_name(o.refinement).c_str(), radius.c_str(),
         cg::mra::radius_grid_name(o.radius_grid).c_str(), o.patch, o.patch_clip ? " clipped" : "",
         o.truncation, static_cast<int>(o.invariance),
-        cg::mra::localization_name(o.localization).c_str());
+        cg::mra::localization_name(o.localization).c_str(), o.relaxation);
     std::fflush(stdout);
     // The fine reference first, its factor freed before the build: at 64^3 it takes 19 GB.
     const auto [ff, fs] = [&] {

@@ -219,6 +219,11 @@ void validate(const Options& options) {
     CG_VERIFY(options.defect_tolerance >= 0 && std::isfinite(options.defect_tolerance),
               "mra: defect_tolerance = {} must be finite and at least 0 (0: fixed radius)",
               options.defect_tolerance);
+    CG_VERIFY(std::isfinite(options.relaxation) && options.relaxation >= 0,
+              "mra: relaxation = {} must be finite and at least 0 (0: exact measurements)",
+              options.relaxation);
+    CG_VERIFY(options.relaxation == 0 || by_cell,
+              "mra: relaxation needs cell localization with a finite radius");
     CG_VERIFY(options.defect_tolerance == 0 || !by_cell,
               "mra: defect_tolerance needs node localization (cell localization has no "
               "per-node defect)");
@@ -323,8 +328,8 @@ namespace {
 /// `mesh` is level q).
 Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 const SparseMatrix* K, const SparseMatrix* A_free,
-                const std::vector<Index>& fixed_dofs,
-                const Options& options, const material::ElementMaterials* materials) {
+                const std::vector<Index>& fixed_dofs, const Options& options,
+                const material::ElementMaterials* materials) {
     const bool on_grid = meshes == nullptr;
     CG_VERIFY(!on_grid || mesh.grid.has_value(),
               "mra: the fine mesh must be a regular grid (mesh.grid), the material-adapted "
@@ -529,7 +534,18 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         CG_VERIFY(L.dofs.size() > 0, "mra: level {} has no degree of freedom left", k);
         g.coarse_dofs = L.dofs;
         const double rotation_scale = spacing_of(k + 1);
-        if (by_cell && !std::isinf(L.radius) && options.refinement == Refinement::Linear) {
+        // The relaxed cell-wise solves start from the canonical basis C^k Φ^{k+1} (its
+        // coefficients are nodal values), the others from a left inverse of C^{k,T}.
+        const bool relaxed = by_cell && options.relaxation > 0 && !std::isinf(L.radius);
+        // Rig^k, the coefficients of the rigid motions at level k (invariance correction): their
+        // measurements C^k Rig^{k+1} (C^k C̃^{k,T} = I), or with relaxed solves their values at
+        // the nodes of level k (C^{k,T} interpolates them exactly).
+        const auto rigid_coefficients = [&] {
+            return relaxed ? detail::rigid_modes(dim, positions_of(k), L.dofs)
+                           : Matrix(L.C * rig_next);
+        };
+        if (by_cell && !relaxed && !std::isinf(L.radius) &&
+            options.refinement == Refinement::Linear) {
             const Phase phase(tag + "rigid left inverse", &h.timings);
             L.C_dagger =
                 detail::rigid_left_inverse(L.C, L.C_dagger, g, rig_next, positions, rotation_scale);
@@ -538,8 +554,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         SparseMatrix R;
         {
             const Phase phase(tag + "B", &h.timings);
-            L.B = detail::symmetrized(
-                detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
+            // The relaxed cell-wise solves do not read B^k.
+            if (!relaxed || options.store_wavelet_stiffness)
+                L.B = detail::symmetrized(
+                    detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
             if (!by_cell || std::isinf(L.radius))
                 R = detail::triple_product(L.W, A, SparseMatrix(L.C_dagger.transpose()));
         }
@@ -549,17 +567,23 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
             Ct = detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation, g);
         } else if (by_cell) {
-            SparseMatrix Z;
-            {
-                const Phase phase(tag + "Z (cell-localized solves)", &h.timings);
-                Z = detail::cell_localized_z(
-                    L.B, L.W, product(L.W, Phi_present), product(L.C_dagger, Phi_present),
-                    detail::cell_stiffness(mesh, *materials, h.fine_dofs, L.cells, options.patch,
-                                           options.formulation),
-                    g, rings);
+            const std::vector<detail::CellStiffness> parts = detail::cell_stiffness(
+                mesh, *materials, h.fine_dofs, L.cells, options.patch, options.formulation);
+            if (relaxed) {
+                const Phase phase(tag + "C adapted (relaxed cell-localized solves)", &h.timings);
+                Ct = L.C + detail::relaxed_cell_corrections(A, L.C, Phi_present,
+                                                            product(L.C, Phi_present), parts, g,
+                                                            rings, options.relaxation);
+            } else {
+                SparseMatrix Z;
+                {
+                    const Phase phase(tag + "Z (cell-localized solves)", &h.timings);
+                    Z = detail::cell_localized_z(L.B, L.W, product(L.W, Phi_present),
+                                                 product(L.C_dagger, Phi_present), parts, g, rings);
+                }
+                const Phase phase(tag + "C adapted", &h.timings);
+                Ct = L.C_dagger + product(Z, L.W);
             }
-            const Phase phase(tag + "C adapted", &h.timings);
-            Ct = L.C_dagger + product(Z, L.W);
             Ct.makeCompressed();
         } else {
             const Phase phase(tag + "C adapted (localized solves)", &h.timings);
@@ -666,13 +690,13 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                         for (int x = lo[0]; x <= hi[0]; ++x)
                             skip[static_cast<std::size_t>(x + nf[0] * (y + nf[1] * z))] = 1;
             }
-            const Matrix rig = L.C * rig_next;
+            const Matrix rig = rigid_coefficients();
             L.invariance_applied =
                 detail::correct_invariance(Ct, g, skip, rig, rig_next, positions, rotation_scale);
             rig_next = rig;
         } else {
             L.invariance_applied.assign(static_cast<std::size_t>(fine_count), 0);
-            rig_next = L.C * rig_next;
+            rig_next = rigid_coefficients();
         }
         {
             const Phase phase(tag + "A", &h.timings);

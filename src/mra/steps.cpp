@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdint>
 #include <exception>
+#include <functional>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <utility>
@@ -304,7 +306,7 @@ Matrix solve_region(const SparseMatrix& B, const std::vector<Index>& S,
         principal_block(B, S, local, nnz, nullptr, scratch.b);
         solve::DenseCholesky llt;
         CG_VERIFY(llt.compute(Matrix(scratch.b)) == 0,
-                  "mra: a local wavelet stiffness (n = {}) is not positive definite", ns);
+                  "mra: a local system (n = {}) is not positive definite", ns);
         return llt.solve(rhs);
     }
     while (scratch.solvers.size() <= attempt) {
@@ -710,42 +712,44 @@ std::pair<Eigen::Vector3i, Eigen::Vector3i> cell_region(const CellStiffness& par
             (2 * part.cell.array() + 2 * part.span + rings).min(nf.array() - 1)};
 }
 
-/// Z = sum_T Z^T, summed in place. Row r's pattern is the wavelets of the bounding box of the
-/// regions of the cells whose C^† Φ reaches r: a superset of the union of their S_T (the regions
-/// of a block of cells overlap), so each cell's solution is added where it falls. Holding the
-/// cells' solutions as triplets instead took ~10 per entry of Z (a peak of 10.8 GB at 16^3 hexes,
-/// rho = 5).
+/// Unknowns of a cell-wise localized solve on a box [lo, hi] of level-(k+1) nodes: fills S
+/// (sorted) and sets local[u] to the position of unknown u in S (local holds -1 for every unknown
+/// on entry). Monotone: a larger box holds the unknowns of a smaller one.
+using BoxUnknowns = std::function<void(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi,
+                                       std::vector<Index>& local, std::vector<Index>& S)>;
+
+/// sum_T X^T, summed in place. Row r's pattern is the unknowns of the bounding box of the
+/// regions of the cells whose start row G[r, :] (C^† Φ or C Φ) reaches: a superset of the union of
+/// their S_T (the regions of a block of cells overlap), so each cell's solution is added where it
+/// falls. Holding the cells' solutions as triplets instead took ~10 per entry of Z (a peak of 10.8
+/// GB at 16^3 hexes, rho = 5).
 class CellSum {
   public:
-    CellSum(const SparseMatrix& W, const SparseMatrix& CdPhi,
+    CellSum(Index unknowns, const BoxUnknowns& in_box, const SparseMatrix& G,
             const std::vector<CellStiffness>& parts, const StepGeometry& g, int rings)
-        : cols_(static_cast<std::size_t>(CdPhi.rows())),
-          values_(cols_.size()),
-          locks_(cols_.size()) {
+        : cols_(static_cast<std::size_t>(G.rows())), values_(cols_.size()), locks_(cols_.size()) {
         const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
         std::vector<Eigen::Vector3i> lo(cols_.size(), nf),
             hi(cols_.size(), Eigen::Vector3i(-1, -1, -1));
         for (const CellStiffness& part : parts) {
             const auto [a, b] = cell_region(part, rings, nf);
-            for (const Index r : touching_rows(CdPhi, part.dofs)) {
+            for (const Index r : touching_rows(G, part.dofs)) {
                 lo[static_cast<std::size_t>(r)] = lo[static_cast<std::size_t>(r)].cwiseMin(a);
                 hi[static_cast<std::size_t>(r)] = hi[static_cast<std::size_t>(r)].cwiseMax(b);
             }
         }
-        const std::vector<Index> fine_local = fine_local_index(g);
-        for_each_region(static_cast<Index>(cols_.size()), static_cast<Index>(W.rows()),
+        for_each_region(static_cast<Index>(cols_.size()), unknowns,
                         [&](Index r, RegionScratch& scratch) {
                             const auto q = static_cast<std::size_t>(r);
                             if ((hi[q].array() < lo[q].array()).any()) return;
-                            box_wavelets(W, fine_local, nf, g.dim, lo[q], hi[q], scratch.local,
-                                         cols_[q]);
-                            for (const Index w : cols_[q])
-                                scratch.local[static_cast<std::size_t>(w)] = -1;
+                            in_box(lo[q], hi[q], scratch.local, cols_[q]);
+                            for (const Index u : cols_[q])
+                                scratch.local[static_cast<std::size_t>(u)] = -1;
                             values_[q].assign(cols_[q].size(), 0.0);
                         });
     }
 
-    /// Z[rows[q], S] -= x[:, q] for every q (S sorted, within each row's pattern).
+    /// X[rows[q], S] -= x[:, q] for every q (S sorted, within each row's pattern).
     void subtract(const Matrix& x, const IndexVector& rows, const std::vector<Index>& S) {
         for (Index q = 0; q < rows.size(); ++q) {
             const auto r = static_cast<std::size_t>(rows[q]);
@@ -754,28 +758,28 @@ class CellSum {
             std::size_t p = 0;
             for (std::size_t s = 0; s < S.size(); ++s) {
                 while (p < cols.size() && cols[p] < S[s]) ++p;
-                CG_ASSERT(p < cols.size() && cols[p] == S[s], "mra: wavelet outside its row's box");
+                CG_ASSERT(p < cols.size() && cols[p] == S[s], "mra: unknown outside its row's box");
                 values_[r][p] -= x(static_cast<Index>(s), q);
             }
         }
     }
 
     /// The sum, its exact zeros dropped; the accumulator is emptied.
-    SparseMatrix take(Index wavelets) {
-        RowSparse Z(static_cast<Index>(cols_.size()), wavelets);
-        IndexVector sizes(Z.rows());
+    SparseMatrix take(Index unknowns) {
+        RowSparse X(static_cast<Index>(cols_.size()), unknowns);
+        IndexVector sizes(X.rows());
         for (std::size_t r = 0; r < cols_.size(); ++r)
             sizes[static_cast<Index>(r)] = static_cast<Index>(cols_[r].size());
-        Z.reserve(sizes);
+        X.reserve(sizes);
         for (std::size_t r = 0; r < cols_.size(); ++r) {
             for (std::size_t p = 0; p < cols_[r].size(); ++p)
                 if (values_[r][p] != 0.0)
-                    Z.insert(static_cast<Index>(r), cols_[r][p]) = values_[r][p];
+                    X.insert(static_cast<Index>(r), cols_[r][p]) = values_[r][p];
             std::vector<Index>().swap(cols_[r]);
             std::vector<double>().swap(values_[r]);
         }
-        Z.makeCompressed();
-        return SparseMatrix(Z);
+        X.makeCompressed();
+        return SparseMatrix(X);
     }
 
   private:
@@ -784,41 +788,113 @@ class CellSum {
     std::vector<std::mutex> locks_;
 };
 
+/// X = sum_T X^T with X^T[:, S_T] = -x^T and op[S_T, S_T] x = F[S_T, T] A_T G[:, T]^T: the
+/// cell-wise localized solves of both constructions (G the start rows over the present fine DOFs:
+/// C^† Φ or C Φ). `op` is symmetric (both triangles) on `unknowns` unknowns, whose functions over
+/// the present fine DOFs are the rows of F; S_T are the unknowns `in_box` gives for the box of
+/// `rings` rings around part T. One factorization per part, parts in parallel (OpenMP).
+SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxUnknowns& in_box,
+                              const SparseMatrix& F, const SparseMatrix& G,
+                              const std::vector<CellStiffness>& parts, const StepGeometry& g,
+                              int rings) {
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
+    CellSum X(unknowns, in_box, G, parts, g, rings);
+    for_each_region(static_cast<Index>(parts.size()), unknowns,
+                    [&](Index n, RegionScratch& scratch) {
+                        std::vector<Index>& local = scratch.local;
+                        std::vector<Index>& S = scratch.S;
+                        const CellStiffness& part = parts[static_cast<std::size_t>(n)];
+                        // F[:, T] A_T G[:, T]^T, over the rows that touch T.
+                        IndexVector frows, crows;
+                        const Matrix ft = column_block(F, part.dofs, frows);
+                        const Matrix ct = column_block(G, part.dofs, crows);
+                        if (frows.size() == 0 || crows.size() == 0) return;
+                        const Matrix rt = ft * part.A * ct.transpose();
+                        const auto [lo, hi] = cell_region(part, rings, nf);
+                        in_box(lo, hi, local, S);
+                        const Index ns = static_cast<Index>(S.size());
+                        Matrix rhs = Matrix::Zero(ns, crows.size());
+                        for (Index r = 0; r < frows.size(); ++r) {
+                            const Index s = local[static_cast<std::size_t>(frows[r])];
+                            if (s >= 0) rhs.row(s) = rt.row(r);
+                        }
+                        Matrix x;
+                        if (ns > 0) x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
+                        for (const Index u : S) local[static_cast<std::size_t>(u)] = -1;
+                        if (ns > 0) X.subtract(x, crows, S);
+                    });
+    return X.take(unknowns);
+}
+
+/// The smallest diagonal entry of A (both triangles, on g.fine_dofs) at a node of level k+1 that
+/// is not on the grid's boundary and has all its DOFs: the stiffness of the softest material at
+/// the level's scale (2^dim K_e(0, 0) of its element on the finest level).
+double soft_diagonal(const SparseMatrix& A, const StepGeometry& g) {
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
+    double d = std::numeric_limits<double>::infinity();
+    for (Index l0 = 0, l1 = 0; l0 < g.fine_dofs.size(); l0 = l1) {
+        l1 = node_end(g.fine_dofs, g.dim, l0);
+        const Eigen::Vector3i c = node_coordinates(g.fine_dofs[l0] / g.dim, g.fine_cells, g.dim);
+        bool interior = l1 - l0 == g.dim;
+        for (int a = 0; a < g.dim; ++a) interior = interior && c[a] > 0 && c[a] < nf[a] - 1;
+        for (Index l = l0; interior && l < l1; ++l) d = std::min(d, A.coeff(l, l));
+    }
+    CG_VERIFY(std::isfinite(d) && d > 0,
+              "mra: relaxed cell localization needs a node inside the grid of {} x {} x {} cells "
+              "with a positive diagonal",
+              g.fine_cells[0], g.fine_cells[1], g.fine_cells[2]);
+    return d;
+}
+
 }  // namespace
 
 SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                               const SparseMatrix& WPhi, const SparseMatrix& CdPhi,
                               const std::vector<CellStiffness>& parts, const StepGeometry& g,
                               int rings) {
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
+    const std::vector<Index> fine_local = fine_local_index(g);
+    const BoxUnknowns wavelets = [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi,
+                                     std::vector<Index>& local, std::vector<Index>& S) {
+        box_wavelets(W, fine_local, nf, g.dim, lo, hi, local, S);
+    };
+    return cell_corrections(B, static_cast<Index>(W.rows()), wavelets, WPhi, CdPhi, parts, g,
+                            rings);
+}
+
+SparseMatrix relaxed_cell_corrections(const SparseMatrix& A, const SparseMatrix& C,
+                                      const SparseMatrix& Phi, const SparseMatrix& CPhi,
+                                      const std::vector<CellStiffness>& parts,
+                                      const StepGeometry& g, int rings, double relaxation) {
     const int dim = g.dim;
-    const Index nw = static_cast<Index>(W.rows());
     const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
     const std::vector<Index> fine_local = fine_local_index(g);
-    CellSum Z(W, CdPhi, parts, g, rings);
-    for_each_region(static_cast<Index>(parts.size()), nw, [&](Index n, RegionScratch& scratch) {
-        std::vector<Index>& local = scratch.local;
-        std::vector<Index>& S = scratch.S;
-        const CellStiffness& part = parts[static_cast<std::size_t>(n)];
-        // R^T = (W Φ)[:, T] A_T (C^† Φ)[:, T]^T, over the rows that touch T.
-        IndexVector wrows, crows;
-        const Matrix wt = column_block(WPhi, part.dofs, wrows);
-        const Matrix ct = column_block(CdPhi, part.dofs, crows);
-        if (wrows.size() == 0 || crows.size() == 0) return;
-        const Matrix rt = wt * part.A * ct.transpose();
-        const auto [lo, hi] = cell_region(part, rings, nf);
-        box_wavelets(W, fine_local, nf, dim, lo, hi, local, S);
-        const Index ns = static_cast<Index>(S.size());
-        Matrix rhs = Matrix::Zero(ns, crows.size());
-        for (Index r = 0; r < wrows.size(); ++r) {
-            const Index s = local[static_cast<std::size_t>(wrows[r])];
-            if (s >= 0) rhs.row(s) = rt.row(r);
-        }
-        Matrix x;
-        if (ns > 0) x = solve_region(B, S, local, rhs, dim, scratch, 0, true);
-        for (const Index w : S) local[static_cast<std::size_t>(w)] = -1;
-        if (ns > 0) Z.subtract(x, crows, S);
-    });
-    return Z.take(nw);
+    const SparseMatrix Ct = C.transpose();
+    SparseMatrix M = A + (soft_diagonal(A, g) / relaxation) * SparseMatrix(Ct * C);
+    M.makeCompressed();
+    // The DOFs of the box's nodes but those on a face of the box inside the grid: the functions
+    // supported in the box.
+    const BoxUnknowns interior = [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi,
+                                     std::vector<Index>& local, std::vector<Index>& S) {
+        S.clear();
+        const auto inside = [&](int x, int a) {
+            return (x > lo[a] || lo[a] == 0) && (x < hi[a] || hi[a] == nf[a] - 1);
+        };
+        for (int z = lo[2]; z <= hi[2]; ++z)
+            for (int y = lo[1]; y <= hi[1]; ++y)
+                for (int x = lo[0]; x <= hi[0]; ++x) {
+                    if (!inside(x, 0) || !inside(y, 1) || !inside(z, 2)) continue;
+                    const Index v = x + nf[0] * (y + static_cast<Index>(nf[1]) * z);
+                    for (int d = 0; d < dim; ++d)
+                        if (const Index l = fine_local[static_cast<std::size_t>(dim * v + d)];
+                            l >= 0)
+                            S.push_back(l);
+                }
+        std::sort(S.begin(), S.end());
+        for (std::size_t s = 0; s < S.size(); ++s)
+            local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
+    };
+    return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, CPhi, parts, g, rings);
 }
 
 SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,

@@ -80,6 +80,11 @@ mra::Options parse_mra(const JsonReader& r) {
         v->fail_unless(o.defect_tolerance >= 0, "expected a number >= 0 (0: fixed radius), got {}",
                        o.defect_tolerance);
     }
+    if (auto v = r.find("relaxation")) {
+        o.relaxation = v->number();
+        v->fail_unless(o.relaxation >= 0, "expected a number >= 0 (0: exact measurements), got {}",
+                       o.relaxation);
+    }
     if (auto v = r.find("max_radius")) {
         o.max_radius = v->number();
         v->fail_unless(o.max_radius >= 1, "expected a number >= 1, got {}", o.max_radius);
@@ -122,10 +127,30 @@ CoarseOptions parse_coarse_options(const nlohmann::json& coarse, const std::stri
     if (coarse.is_null()) return o;
     const JsonReader r(coarse, "coarse", source);
     // One list for every method, so that one scene can be coarsened by each of them.
-    r.allow_only({"mesh", "normals", "boundary", "map", "mass", "levels", "level_meshes",
-                  "refinement", "radius", "radius_grid", "patch", "patch_clip", "truncation",
-                  "invariance", "dirichlet", "spectrum_max_dofs", "cell_tensors", "localization",
-                  "measurement", "operator", "defect_tolerance", "max_radius", "boundary_blind"});
+    r.allow_only({"mesh",
+                  "normals",
+                  "boundary",
+                  "map",
+                  "mass",
+                  "levels",
+                  "level_meshes",
+                  "refinement",
+                  "radius",
+                  "radius_grid",
+                  "patch",
+                  "patch_clip",
+                  "truncation",
+                  "invariance",
+                  "dirichlet",
+                  "spectrum_max_dofs",
+                  "cell_tensors",
+                  "localization",
+                  "measurement",
+                  "operator",
+                  "defect_tolerance",
+                  "max_radius",
+                  "relaxation",
+                  "boundary_blind"});
     o.homogenize = parse_homogenize(r);
     o.hierarchy = r.has("levels") || r.has("level_meshes");
     o.mra = parse_mra(r);

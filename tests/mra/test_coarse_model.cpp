@@ -151,6 +151,7 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(d.dirichlet, DirichletTreatment::Constrain);
     EXPECT_EQ(d.defect_tolerance, 0.0);
     EXPECT_EQ(d.max_radius, 16.0);
+    EXPECT_EQ(d.relaxation, 0.0);
     const Options o =
         scene::parse_coarse_options(
             json::parse(R"({"levels": 4, "refinement": "dirac", "radius": [2, "inf", 3.5],
@@ -177,6 +178,11 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     EXPECT_EQ(scene::parse_coarse_options(json::parse(R"({"localization": "cell"})"), "t")
                   .mra.localization,
               Localization::Cell);
+    const Options relaxed =
+        scene::parse_coarse_options(
+            json::parse(R"({"radius": 4, "localization": "cell", "relaxation": 3})"), "t")
+            .mra;
+    EXPECT_EQ(relaxed.relaxation, 3.0);
 }
 
 TEST(MraCoarseModel, BadOptionsNameTheirKey) {
@@ -203,6 +209,12 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
         {R"({"defect_tolerance": -1e-3})",
          "coarse.defect_tolerance: expected a number >= 0 (0: fixed radius), got -0.001"},
         {R"({"max_radius": 0.5})", "coarse.max_radius: expected a number >= 1, got 0.5"},
+        {R"({"relaxation": -1})",
+         "coarse.relaxation: expected a number >= 0 (0: exact measurements), got -1"},
+        {R"({"radius": 4, "relaxation": 3})",
+         "coarse: mra: relaxation needs cell localization with a finite radius"},
+        {R"({"localization": "cell", "relaxation": 3})",
+         "coarse: mra: relaxation needs cell localization with a finite radius"},
         {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
         {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},
         {R"({"dirichlet": "clamp"})", "coarse.dirichlet: unknown value \"clamp\""},

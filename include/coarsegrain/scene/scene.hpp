@@ -62,7 +62,7 @@ struct CoarseOptions {
     /// boundary-blind variants mra-linear-blind and mra-dirac-blind.
     bool boundary_blind = false;
     /// coarse.levels, refinement, radius, radius_grid, defect_tolerance, max_radius, patch,
-    /// patch_clip, localization, measurement, truncation, invariance, dirichlet
+    /// patch_clip, localization, relaxation, measurement, truncation, invariance, dirichlet
     /// (mra::validate holds).
     mra::Options mra;
     /// coarse.spectrum_max_dofs, coarse.cell_tensors.
