@@ -222,8 +222,11 @@ void validate(const Options& options) {
     CG_VERIFY(std::isfinite(options.relaxation) && options.relaxation >= 0,
               "mra: relaxation = {} must be finite and at least 0 (0: exact measurements)",
               options.relaxation);
-    CG_VERIFY(options.relaxation == 0 || by_cell,
-              "mra: relaxation needs cell localization with a finite radius");
+    CG_VERIFY(options.relaxation == 0 || (options.localization == Localization::Cell &&
+                                          std::none_of(options.radius.begin(), options.radius.end(),
+                                                       [](double r) { return std::isinf(r); })),
+              "mra: relaxation needs cell localization with a finite radius at every step (its "
+              "coarse coefficients are nodal values, those of global solves measurements)");
     CG_VERIFY(options.defect_tolerance == 0 || !by_cell,
               "mra: defect_tolerance needs node localization (cell localization has no "
               "per-node defect)");

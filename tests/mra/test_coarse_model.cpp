@@ -215,6 +215,8 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
          "coarse: mra: relaxation needs cell localization with a finite radius"},
         {R"({"localization": "cell", "relaxation": 3})",
          "coarse: mra: relaxation needs cell localization with a finite radius"},
+        {R"({"levels": 3, "radius": ["inf", 4], "localization": "cell", "relaxation": 3})",
+         "coarse: mra: relaxation needs cell localization with a finite radius at every step"},
         {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
         {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},
         {R"({"dirichlet": "clamp"})", "coarse.dirichlet: unknown value \"clamp\""},

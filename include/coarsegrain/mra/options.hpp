@@ -137,15 +137,17 @@ struct Options {
     /// or Ignore treatment, whose fine operator is the sum of the element matrices, and no
     /// patch_clip).
     Localization localization = Localization::Node;
-    /// Relaxed measurements gamma (cell localization with a finite radius; 0: exact). Each cell's
-    /// corrector replaces the constraint that its measurements vanish, C w = 0, by the penalty
-    /// |C w|^2 d / (2 gamma) (d: the softest material's stiffness on the level), and is solved in
-    /// the level's whole space on the nodes within `radius` rings of the cell (relaxed constraint
-    /// energy minimization, Chung, Efendiev and Leung 2018). The global space is the same for
-    /// every gamma; localized, the correctors decay much faster through soft material around
-    /// stiff inclusions and layers, where the exact ones lock. Measured (16^3 hexes, 2 levels, 6
-    /// rings, gamma 3): particles 1.26x the global energy error against 8x exact, tables in
-    /// docs/mra-localization.md, "Relaxed measurements".
+    /// Relaxed measurements gamma (cell localization with finite radii at every step; 0: exact).
+    /// Each cell's corrector replaces the constraint that its measurements vanish, C w = 0, by the
+    /// penalty |C w|^2 d / (2 gamma) (d: the softest material's stiffness on the level), and is
+    /// solved in the level's whole space on the nodes within `radius` rings of the cell, from the
+    /// canonical basis (relaxed constraint energy minimization, Chung, Efendiev and Leung 2018):
+    /// the coarse coefficients are nodal values, not measurements, and C̃ reproduces the rigid
+    /// motions without the invariance correction. The global space is the same for every gamma;
+    /// localized, the correctors decay much faster through soft material around stiff
+    /// inclusions, where the exact ones lock. 16^3 hexes, 216 stiff spheres, 2 levels, 6 rings,
+    /// gamma 3: 1.26x the global energy error (exact constraints at the same storage: 8.6x);
+    /// docs/mra-localization.md, "Relaxed measurements in the library".
     double relaxation = 0;
     Measurement measurement = Measurement::Canonical;
     /// coarse.operator: what the fine operator given to build_hierarchy is. Cell localization
@@ -189,7 +191,8 @@ inline constexpr int kMaxLevels = 17;
 /// keys): levels in 2..kMaxLevels; one radius or levels - 1, each >= 1 (or infinity); patch >=
 /// 1; truncation in [0, 1); penalty > 0; defect_tolerance finite and >= 0; max_radius >= 1; and
 /// for cell localization with a finite radius no patch_clip, the eliminate, constrain or ignore
-/// treatment, and no defect_tolerance.
+/// treatment, and no defect_tolerance; relaxation finite and >= 0, and > 0 only with cell
+/// localization and finite radii at every step.
 /// @throws Error naming the option
 void validate(const Options& options);
 
