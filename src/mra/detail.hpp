@@ -133,8 +133,8 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                               const std::vector<CellStiffness>& parts, const StepGeometry& g,
                               int rings);
 
-/// The relaxed cell-wise corrections X (Options::relaxation gamma > 0): C̃ = C + X, #coarse DOFs
-/// by #level-(k+1) DOFs, starting from the canonical basis C Φ^{k+1} (Eq. 6). The constraint
+/// C̃ = C + X by relaxed cell-wise corrections X (Options::relaxation gamma > 0), #coarse DOFs by
+/// #level-(k+1) DOFs, starting from the canonical basis C Φ^{k+1} (Eq. 6). The constraint
 /// C w = 0 of the exact corrector (cell_localized_z, in the wavelet space) becomes the penalty
 /// |C w|^2 d / (2 gamma), d the smallest diagonal entry of A at an interior node of level k+1 (the
 /// softest material's stiffness at the level's scale): the corrector of part T minimizes
@@ -150,10 +150,10 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
 /// DOF), so C̃^T r_c = r without the invariance correction. A: A^{k+1}, both triangles; Phi:
 /// Φ^{k+1} on the present fine DOFs (rows: level-(k+1) DOFs); CPhi = C Φ.
 /// @throws Error if level k+1 has no interior node with all its DOFs (no scale d)
-SparseMatrix relaxed_cell_corrections(const SparseMatrix& A, const SparseMatrix& C,
-                                      const SparseMatrix& Phi, const SparseMatrix& CPhi,
-                                      const std::vector<CellStiffness>& parts,
-                                      const StepGeometry& g, int rings, double relaxation);
+SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
+                                        const SparseMatrix& Phi, const SparseMatrix& CPhi,
+                                        const std::vector<CellStiffness>& parts,
+                                        const StepGeometry& g, int rings, double relaxation);
 
 /// A sparse left inverse X^T of C^T (C X = I, the role of C^† in Eq. 11) that reproduces rigid
 /// motions, X C r = r for the modes rig_fine (Rig^{k+1}), which cell localization needs: then

@@ -574,9 +574,9 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 mesh, *materials, h.fine_dofs, L.cells, options.patch, options.formulation);
             if (relaxed) {
                 const Phase phase(tag + "C adapted (relaxed cell-localized solves)", &h.timings);
-                Ct = L.C + detail::relaxed_cell_corrections(A, L.C, Phi_present,
-                                                            product(L.C, Phi_present), parts, g,
-                                                            rings, options.relaxation);
+                Ct = detail::relaxed_adapted_refinement(A, L.C, Phi_present,
+                                                        product(L.C, Phi_present), parts, g, rings,
+                                                        options.relaxation);
             } else {
                 SparseMatrix Z;
                 {

@@ -718,19 +718,22 @@ std::pair<Eigen::Vector3i, Eigen::Vector3i> cell_region(const CellStiffness& par
 using BoxUnknowns = std::function<void(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi,
                                        std::vector<Index>& local, std::vector<Index>& S)>;
 
-/// sum_T X^T, summed in place. Row r's pattern is the unknowns of the bounding box of the
-/// regions of the cells whose start row G[r, :] (C^† Φ or C Φ) reaches: a superset of the union of
-/// their S_T (the regions of a block of cells overlap), so each cell's solution is added where it
-/// falls. Holding the cells' solutions as triplets instead took ~10 per entry of Z (a peak of 10.8
-/// GB at 16^3 hexes, rho = 5).
+/// Start + sum_T X^T, summed in place in its final column-major storage, so that one copy of it
+/// is alive while it is built. Row r's pattern is the unknowns of the bounding box of the regions
+/// of the cells whose start row G[r, :] (C^† Φ or C Φ) reaches (a superset of the union of their
+/// S_T: the regions of a block of cells overlap, so each cell's solution is added where it falls),
+/// plus the start's entries. Holding the cells' solutions as triplets instead took ~10 per entry
+/// of Z (a peak of 10.8 GB at 16^3 hexes, rho = 5); a row-wise accumulator copied into the
+/// matrix, and the matrix added to the start, kept 3 copies alive.
 class CellSum {
   public:
+    /// `start`: #rows by `unknowns`, or empty (0 by 0) for none.
     CellSum(Index unknowns, const BoxUnknowns& in_box, const SparseMatrix& G,
-            const std::vector<CellStiffness>& parts, const StepGeometry& g, int rings)
-        : cols_(static_cast<std::size_t>(G.rows())), values_(cols_.size()), locks_(cols_.size()) {
+            const SparseMatrix& start, const std::vector<CellStiffness>& parts,
+            const StepGeometry& g, int rings) {
+        const auto rows = static_cast<std::size_t>(G.rows());
         const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
-        std::vector<Eigen::Vector3i> lo(cols_.size(), nf),
-            hi(cols_.size(), Eigen::Vector3i(-1, -1, -1));
+        std::vector<Eigen::Vector3i> lo(rows, nf), hi(rows, Eigen::Vector3i(-1, -1, -1));
         for (const CellStiffness& part : parts) {
             const auto [a, b] = cell_region(part, rings, nf);
             for (const Index r : touching_rows(G, part.dofs)) {
@@ -738,67 +741,100 @@ class CellSum {
                 hi[static_cast<std::size_t>(r)] = hi[static_cast<std::size_t>(r)].cwiseMax(b);
             }
         }
-        for_each_region(static_cast<Index>(cols_.size()), unknowns,
-                        [&](Index r, RegionScratch& scratch) {
-                            const auto q = static_cast<std::size_t>(r);
-                            if ((hi[q].array() < lo[q].array()).any()) return;
-                            in_box(lo[q], hi[q], scratch.local, cols_[q]);
-                            for (const Index u : cols_[q])
-                                scratch.local[static_cast<std::size_t>(u)] = -1;
-                            values_[q].assign(cols_[q].size(), 0.0);
-                        });
-    }
-
-    /// X[rows[q], S] -= x[:, q] for every q (S sorted, within each row's pattern).
-    void subtract(const Matrix& x, const IndexVector& rows, const std::vector<Index>& S) {
-        for (Index q = 0; q < rows.size(); ++q) {
-            const auto r = static_cast<std::size_t>(rows[q]);
-            const std::lock_guard<std::mutex> lock(locks_[r]);
-            const std::vector<Index>& cols = cols_[r];
-            std::size_t p = 0;
-            for (std::size_t s = 0; s < S.size(); ++s) {
-                while (p < cols.size() && cols[p] < S[s]) ++p;
-                CG_ASSERT(p < cols.size() && cols[p] == S[s], "mra: unknown outside its row's box");
-                values_[r][p] -= x(static_cast<Index>(s), q);
+        const RowSparse start_rows =
+            start.size() > 0 ? RowSparse(start) : RowSparse(G.rows(), unknowns);
+        // Row r's pattern, sorted, into `pattern`.
+        const auto row_pattern = [&](Index r, RegionScratch& scratch, std::vector<Index>& pattern) {
+            const auto q = static_cast<std::size_t>(r);
+            std::vector<Index>& box = scratch.S;
+            box.clear();
+            if ((hi[q].array() >= lo[q].array()).all()) {
+                in_box(lo[q], hi[q], scratch.local, box);
+                for (const Index u : box) scratch.local[static_cast<std::size_t>(u)] = -1;
             }
-        }
+            pattern.clear();
+            auto p = box.begin();
+            for (RowSparse::InnerIterator it(start_rows, r); it; ++it) {
+                for (; p != box.end() && *p < it.col(); ++p) pattern.push_back(*p);
+                if (p != box.end() && *p == it.col()) ++p;
+                pattern.push_back(it.col());
+            }
+            pattern.insert(pattern.end(), p, box.end());
+        };
+        // Column counts, then each column's rows (in any order, sorted after).
+        std::vector<Index> cursor(static_cast<std::size_t>(unknowns) + 1, 0);
+        const auto each_row_pattern = [&](auto&& use) {
+            for_each_region(G.rows(), unknowns, [&](Index r, RegionScratch& scratch) {
+                std::vector<Index>& pattern = scratch.own;
+                row_pattern(r, scratch, pattern);
+                for (const Index u : pattern) use(r, u);
+            });
+        };
+        each_row_pattern([&](Index, Index u) {
+#pragma omp atomic
+            ++cursor[static_cast<std::size_t>(u) + 1];
+        });
+        for (std::size_t u = 1; u < cursor.size(); ++u) cursor[u] += cursor[u - 1];
+        X_.resize(G.rows(), unknowns);
+        X_.resizeNonZeros(cursor.back());
+        std::copy(cursor.begin(), cursor.end(), X_.outerIndexPtr());
+        Index* inner = X_.innerIndexPtr();
+        each_row_pattern([&](Index r, Index u) {
+            Index position;
+#pragma omp atomic capture
+            position = cursor[static_cast<std::size_t>(u)]++;
+            inner[position] = r;
+        });
+        const Index* outer = X_.outerIndexPtr();
+#pragma omp parallel for schedule(dynamic, 256)
+        for (Index u = 0; u < unknowns; ++u) std::sort(inner + outer[u], inner + outer[u + 1]);
+        std::fill(X_.valuePtr(), X_.valuePtr() + X_.nonZeros(), 0.0);
+        for (Index u = 0; u < start.outerSize(); ++u)
+            for (SparseMatrix::InnerIterator it(start, u); it; ++it)
+                entry(it.row(), u) = it.value();
     }
 
-    /// The sum, its exact zeros dropped; the accumulator is emptied.
-    SparseMatrix take(Index unknowns) {
-        RowSparse X(static_cast<Index>(cols_.size()), unknowns);
-        IndexVector sizes(X.rows());
-        for (std::size_t r = 0; r < cols_.size(); ++r)
-            sizes[static_cast<Index>(r)] = static_cast<Index>(cols_[r].size());
-        X.reserve(sizes);
-        for (std::size_t r = 0; r < cols_.size(); ++r) {
-            for (std::size_t p = 0; p < cols_[r].size(); ++p)
-                if (values_[r][p] != 0.0)
-                    X.insert(static_cast<Index>(r), cols_[r][p]) = values_[r][p];
-            std::vector<Index>().swap(cols_[r]);
-            std::vector<double>().swap(values_[r]);
-        }
-        X.makeCompressed();
-        return SparseMatrix(X);
+    /// X[rows[q], S] -= x[:, q] for every q (S sorted, within each row's pattern). Threads may
+    /// call it at once.
+    void subtract(const Matrix& x, const IndexVector& rows, const std::vector<Index>& S) {
+        for (std::size_t s = 0; s < S.size(); ++s)
+            for (Index q = 0; q < rows.size(); ++q) {
+                double& value = entry(rows[q], S[s]);
+#pragma omp atomic
+                value -= x(static_cast<Index>(s), q);
+            }
+    }
+
+    /// The sum, its exact zeros dropped.
+    SparseMatrix take() {
+        X_.prune(0.0);
+        return std::move(X_);
     }
 
   private:
-    std::vector<std::vector<Index>> cols_;
-    std::vector<std::vector<double>> values_;
-    std::vector<std::mutex> locks_;
+    double& entry(Index r, Index u) {
+        const Index* begin = X_.innerIndexPtr() + X_.outerIndexPtr()[u];
+        const Index* end = X_.innerIndexPtr() + X_.outerIndexPtr()[u + 1];
+        const Index* p = std::lower_bound(begin, end, r);
+        CG_ASSERT(p != end && *p == r, "mra: unknown outside its row's box");
+        return X_.valuePtr()[p - X_.innerIndexPtr()];
+    }
+
+    SparseMatrix X_;
 };
 
-/// X = sum_T X^T with X^T[:, S_T] = -x^T and op[S_T, S_T] x = F[S_T, T] A_T G[:, T]^T: the
+/// start + sum_T X^T with X^T[:, S_T] = -x^T and op[S_T, S_T] x = F[S_T, T] A_T G[:, T]^T: the
 /// cell-wise localized solves of both constructions (G the start rows over the present fine DOFs:
-/// C^† Φ or C Φ). `op` is symmetric (both triangles) on `unknowns` unknowns, whose functions over
-/// the present fine DOFs are the rows of F; S_T are the unknowns `in_box` gives for the box of
-/// `rings` rings around part T. One factorization per part, parts in parallel (OpenMP).
+/// C^† Φ or C Φ; `start` #rows of G by `unknowns`, or empty for none). `op` is symmetric (both
+/// triangles) on `unknowns` unknowns, whose functions over the present fine DOFs are the rows of F;
+/// S_T are the unknowns `in_box` gives for the box of `rings` rings around part T. One
+/// factorization per part, parts in parallel (OpenMP).
 SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxUnknowns& in_box,
                               const SparseMatrix& F, const SparseMatrix& G,
-                              const std::vector<CellStiffness>& parts, const StepGeometry& g,
-                              int rings) {
+                              const SparseMatrix& start, const std::vector<CellStiffness>& parts,
+                              const StepGeometry& g, int rings) {
     const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
-    CellSum X(unknowns, in_box, G, parts, g, rings);
+    CellSum X(unknowns, in_box, G, start, parts, g, rings);
     for_each_region(static_cast<Index>(parts.size()), unknowns,
                     [&](Index n, RegionScratch& scratch) {
                         std::vector<Index>& local = scratch.local;
@@ -823,7 +859,7 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
                         for (const Index u : S) local[static_cast<std::size_t>(u)] = -1;
                         if (ns > 0) X.subtract(x, crows, S);
                     });
-    return X.take(unknowns);
+    return X.take();
 }
 
 /// The smallest diagonal entry of A (both triangles, on g.fine_dofs) at a node of level k+1 that
@@ -858,14 +894,14 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                                      std::vector<Index>& local, std::vector<Index>& S) {
         box_wavelets(W, fine_local, nf, g.dim, lo, hi, local, S);
     };
-    return cell_corrections(B, static_cast<Index>(W.rows()), wavelets, WPhi, CdPhi, parts, g,
-                            rings);
+    return cell_corrections(B, static_cast<Index>(W.rows()), wavelets, WPhi, CdPhi, SparseMatrix(),
+                            parts, g, rings);
 }
 
-SparseMatrix relaxed_cell_corrections(const SparseMatrix& A, const SparseMatrix& C,
-                                      const SparseMatrix& Phi, const SparseMatrix& CPhi,
-                                      const std::vector<CellStiffness>& parts,
-                                      const StepGeometry& g, int rings, double relaxation) {
+SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
+                                        const SparseMatrix& Phi, const SparseMatrix& CPhi,
+                                        const std::vector<CellStiffness>& parts,
+                                        const StepGeometry& g, int rings, double relaxation) {
     const int dim = g.dim;
     const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
     const std::vector<Index> fine_local = fine_local_index(g);
@@ -890,11 +926,13 @@ SparseMatrix relaxed_cell_corrections(const SparseMatrix& A, const SparseMatrix&
                             l >= 0)
                             S.push_back(l);
                 }
-        std::sort(S.begin(), S.end());
+        // Sorted as enumerated: the present DOFs are numbered in the order of the grid's.
+        CG_ASSERT(std::is_sorted(S.begin(), S.end()), "mra: box DOFs out of order");
         for (std::size_t s = 0; s < S.size(); ++s)
             local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
     };
-    return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, CPhi, parts, g, rings);
+    return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, CPhi, C, parts, g,
+                            rings);
 }
 
 SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
