@@ -20,10 +20,11 @@
 /// defect-driven radius) build faster in 3D but are much less accurate on smooth, large
 /// deformations: each basis function's small deviation from the global one adds up over the
 /// coarse coefficients. Cell-wise localization with relaxed measurements (Options::relaxation)
-/// comes within 1.1-1.5x of the global error on isolated stiff inclusions at 16^3 hexes at a
-/// third of its density, but the ratio grows with the grid at a fixed radius, and layered beams
-/// still lock. docs/mra-localization.md has the measurements behind each option (accuracy, build
-/// time, storage) and the commands that regenerate them.
+/// comes within 1.0-1.3x of the global error on isolated stiff inclusions and checkers (blocks
+/// of 2^3 cells, 6 rings at 16^3 hexes, 8 at 32^3, C̃ 41% and 15% dense against 99%), but the
+/// radius must grow with the grid, and layered beams still lock. docs/mra-localization.md has the
+/// measurements behind each option (accuracy, build time, storage) and the commands that regenerate
+/// them.
 #include <limits>
 #include <string>
 #include <vector>

@@ -147,6 +147,7 @@ struct Options {
     /// localized, the correctors decay much faster through soft material around stiff
     /// inclusions, where the exact ones lock. 16^3 hexes, 216 stiff spheres, 2 levels, 6 rings,
     /// gamma 3: 1.26x the global energy error (exact constraints at the same storage: 8.6x);
+    /// with patch 2, 1.20x in 0.4x the build, and at 32^3 with 8 rings 1.04x;
     /// docs/mra-localization.md, "Relaxed measurements in the library".
     double relaxation = 0;
     Measurement measurement = Measurement::Canonical;
