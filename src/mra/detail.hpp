@@ -126,8 +126,8 @@ std::vector<CellStiffness> cell_stiffness(const mesh::Mesh& mesh,
 /// CdPhi = C^† Φ), is solved on the wavelets S_T with a nonzero on a level-(k+1) node within
 /// `rings` rings of T: B[S_T, S_T] z = -R^T[S_T, :], and Z = sum_T Z^T. Since sum_T A_T = A^q,
 /// sum_T R^T = R = W A^{k+1} C^{†,T}: with regions spanning the grid this is the global Z.
-/// One factorization per part (a cell, or a block of cells: CellStiffness), parts in parallel
-/// (OpenMP).
+/// One factorization per part (a cell, or a block of cells: CellStiffness), or per box where the
+/// grid clips several parts' boxes to the same one; parts in parallel (OpenMP).
 SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                               const SparseMatrix& WPhi, const SparseMatrix& CdPhi,
                               const std::vector<CellStiffness>& parts, const StepGeometry& g,

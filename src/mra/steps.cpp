@@ -796,7 +796,8 @@ class CellSum {
 
     /// X[rows[q], S] -= x[:, q] for every q (S sorted, within each row's pattern). Threads may
     /// call it at once.
-    void subtract(const Matrix& x, const IndexVector& rows, const std::vector<Index>& S) {
+    void subtract(const Eigen::Ref<const Matrix>& x, const IndexVector& rows,
+                  const std::vector<Index>& S) {
         for (std::size_t s = 0; s < S.size(); ++s)
             for (Index q = 0; q < rows.size(); ++q) {
                 double& value = entry(rows[q], S[s]);
@@ -828,37 +829,62 @@ class CellSum {
 /// C^† Φ or C Φ; `start` #rows of G by `unknowns`, or empty for none). `op` is symmetric (both
 /// triangles) on `unknowns` unknowns, whose functions over the present fine DOFs are the rows of F;
 /// S_T are the unknowns `in_box` gives for the box of `rings` rings around part T. One
-/// factorization per part, parts in parallel (OpenMP).
+/// factorization per distinct box (parts whose boxes coincide share it), boxes in parallel
+/// (OpenMP).
 SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxUnknowns& in_box,
                               const SparseMatrix& F, const SparseMatrix& G,
                               const SparseMatrix& start, const std::vector<CellStiffness>& parts,
                               const StepGeometry& g, int rings) {
     const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
     CellSum X(unknowns, in_box, G, start, parts, g, rings);
-    for_each_region(static_cast<Index>(parts.size()), unknowns,
-                    [&](Index n, RegionScratch& scratch) {
-                        std::vector<Index>& local = scratch.local;
-                        std::vector<Index>& S = scratch.S;
-                        const CellStiffness& part = parts[static_cast<std::size_t>(n)];
-                        // F[:, T] A_T G[:, T]^T, over the rows that touch T.
-                        IndexVector frows, crows;
-                        const Matrix ft = column_block(F, part.dofs, frows);
-                        const Matrix ct = column_block(G, part.dofs, crows);
-                        if (frows.size() == 0 || crows.size() == 0) return;
-                        const Matrix rt = ft * part.A * ct.transpose();
-                        const auto [lo, hi] = cell_region(part, rings, nf);
-                        in_box(lo, hi, local, S);
-                        const Index ns = static_cast<Index>(S.size());
-                        Matrix rhs = Matrix::Zero(ns, crows.size());
-                        for (Index r = 0; r < frows.size(); ++r) {
-                            const Index s = local[static_cast<std::size_t>(frows[r])];
-                            if (s >= 0) rhs.row(s) = rt.row(r);
-                        }
-                        Matrix x;
-                        if (ns > 0) x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
-                        for (const Index u : S) local[static_cast<std::size_t>(u)] = -1;
-                        if (ns > 0) X.subtract(x, crows, S);
-                    });
+    // Parts whose boxes coincide (clipped by the grid: on a coarse level a box may span it) share
+    // one factorization, their right-hand sides solved together.
+    std::map<std::array<int, 6>, std::vector<std::size_t>> by_box;
+    for (std::size_t n = 0; n < parts.size(); ++n) {
+        const auto [lo, hi] = cell_region(parts[n], rings, nf);
+        by_box[{lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]}].push_back(n);
+    }
+    std::vector<std::vector<std::size_t>> groups;
+    for (auto& [box, members] : by_box) groups.push_back(std::move(members));
+    for_each_region(
+        static_cast<Index>(groups.size()), unknowns, [&](Index q, RegionScratch& scratch) {
+            const std::vector<std::size_t>& group = groups[static_cast<std::size_t>(q)];
+            std::vector<Index>& local = scratch.local;
+            std::vector<Index>& S = scratch.S;
+            const auto [lo, hi] = cell_region(parts[group.front()], rings, nf);
+            in_box(lo, hi, local, S);
+            const Index ns = static_cast<Index>(S.size());
+            // Per part T: F[:, T] A_T G[:, T]^T, over the rows that touch T, as columns of rhs.
+            std::vector<IndexVector> crows(group.size());
+            std::vector<Matrix> blocks(group.size());
+            Index columns = 0;
+            for (std::size_t t = 0; t < group.size(); ++t) {
+                const CellStiffness& part = parts[group[t]];
+                IndexVector frows;
+                const Matrix ft = column_block(F, part.dofs, frows);
+                const Matrix ct = column_block(G, part.dofs, crows[t]);
+                if (frows.size() == 0 || crows[t].size() == 0) {
+                    crows[t].resize(0);
+                    continue;
+                }
+                const Matrix rt = ft * part.A * ct.transpose();
+                blocks[t] = Matrix::Zero(ns, crows[t].size());
+                for (Index r = 0; r < frows.size(); ++r)
+                    if (const Index s = local[static_cast<std::size_t>(frows[r])]; s >= 0)
+                        blocks[t].row(s) = rt.row(r);
+                columns += crows[t].size();
+            }
+            if (ns > 0 && columns > 0) {
+                Matrix rhs(ns, columns);
+                for (std::size_t t = 0, c = 0; t < group.size(); c += crows[t++].size())
+                    rhs.middleCols(static_cast<Index>(c), crows[t].size()) = blocks[t];
+                blocks.clear();
+                const Matrix x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
+                for (std::size_t t = 0, c = 0; t < group.size(); c += crows[t++].size())
+                    X.subtract(x.middleCols(static_cast<Index>(c), crows[t].size()), crows[t], S);
+            }
+            for (const Index u : S) local[static_cast<std::size_t>(u)] = -1;
+        });
     return X.take();
 }
 
