@@ -809,7 +809,9 @@ class CellSum {
     /// The sum, its exact zeros dropped.
     SparseMatrix take() {
         X_.prune(0.0);
-        return std::move(X_);
+        SparseMatrix X;  // swapped out: returning X_ would copy it (move_into)
+        X.swap(X_);
+        return X;
     }
 
   private:
