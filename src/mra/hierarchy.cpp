@@ -559,33 +559,30 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             const Phase phase(tag + "B", &h.timings);
             // The relaxed cell-wise solves do not read B^k.
             if (!relaxed || options.store_wavelet_stiffness)
-                detail::move_into(L.B, detail::symmetrized(detail::triple_product(
-                                           L.W, A, SparseMatrix(L.W.transpose()))));
+                L.B = detail::symmetrized(
+                    detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
             if (!by_cell || std::isinf(L.radius))
-                detail::move_into(
-                    R, detail::triple_product(L.W, A, SparseMatrix(L.C_dagger.transpose())));
+                R = detail::triple_product(L.W, A, SparseMatrix(L.C_dagger.transpose()));
         }
         const int rings = std::isinf(L.radius) ? 0 : to_rings(L.radius, k);
         SparseMatrix Ct;  // C̃^k while it is built and used here; kept as L.C_adapted (runs)
         if (std::isinf(L.radius)) {
             const Phase phase(tag + "Z and C adapted (B factorize + solves)", &h.timings);
-            detail::move_into(Ct, detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W,
-                                                                    options.truncation, g));
+            Ct = detail::global_adapted_refinement(L.B, R, L.C_dagger, L.W, options.truncation, g);
         } else if (by_cell) {
             const std::vector<detail::CellStiffness> parts = detail::cell_stiffness(
                 mesh, *materials, h.fine_dofs, L.cells, options.patch, options.formulation);
             if (relaxed) {
                 const Phase phase(tag + "C adapted (relaxed cell-localized solves)", &h.timings);
-                detail::move_into(Ct, detail::relaxed_adapted_refinement(
-                                          A, L.C, Phi_present, product(L.C, Phi_present), parts, g,
-                                          rings, options.relaxation));
+                Ct = detail::relaxed_adapted_refinement(A, L.C, Phi_present,
+                                                        product(L.C, Phi_present), parts, g, rings,
+                                                        options.relaxation);
             } else {
                 SparseMatrix Z;
                 {
                     const Phase phase(tag + "Z (cell-localized solves)", &h.timings);
-                    detail::move_into(Z, detail::cell_localized_z(
-                                             L.B, L.W, product(L.W, Phi_present),
-                                             product(L.C_dagger, Phi_present), parts, g, rings));
+                    Z = detail::cell_localized_z(L.B, L.W, product(L.W, Phi_present),
+                                                 product(L.C_dagger, Phi_present), parts, g, rings);
                 }
                 const Phase phase(tag + "C adapted", &h.timings);
                 Ct = L.C_dagger + product(Z, L.W);
@@ -599,7 +596,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             lr.defect_tolerance = options.defect_tolerance;
             detail::LocalizedRefinement lz = detail::localized_refinement(
                 L.B, R, L.C_dagger, L.W, g, lr, options.patch, options.patch_clip);
-            Ct.swap(lz.Ct);
+            Ct = std::move(lz.Ct);
             L.region_rings = std::move(lz.rings);
         }
         R = SparseMatrix();
@@ -706,7 +703,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         }
         {
             const Phase phase(tag + "A", &h.timings);
-            detail::move_into(L.A, detail::congruence(Ct, A, dof_groups(h, L)));
+            L.A = detail::congruence(Ct, A, dof_groups(h, L));
         }
         if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);
@@ -717,10 +714,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         L.C_adapted = RunMatrix(Ct);
         // Φ^k on the present fine DOFs for the next step (Φ^q = I: C̃ itself); none after the
         // last, where a product would copy C̃ at the build's peak.
-        if (by_cell && k == q - 1 && k > 1)
-            Phi_present.swap(Ct);
-        else if (by_cell && k > 1)
-            detail::move_into(Phi_present, product(Ct, Phi_present));
+        if (by_cell && k > 1) Phi_present = k == q - 1 ? std::move(Ct) : product(Ct, Phi_present);
         Ct = SparseMatrix();
         L.build_seconds = seconds_since(t0);
         if (k > 1) {

@@ -8,11 +8,6 @@
 
 namespace coarsegrain::mra::detail {
 
-/// to = from without a copy. Eigen 3.4's SparseMatrix has no move constructor or assignment, so
-/// `to = f()` and `return std::move(m)` copy (C̃ at 64^3 hexes: 4.5 GB at the build's peak);
-/// a temporary passed here is swapped in.
-inline void move_into(SparseMatrix& to, SparseMatrix from) { to.swap(from); }
-
 /// X Y by the cheaper of a sparse (Gustavson) product and a dense one. The sparse product keeps
 /// its structural pattern (cancellations are stored as zeros), so that matrices of the same
 /// structure get the same pattern whatever the material (the localized solves reuse symbolic

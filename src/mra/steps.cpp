@@ -809,9 +809,7 @@ class CellSum {
     /// The sum, its exact zeros dropped.
     SparseMatrix take() {
         X_.prune(0.0);
-        SparseMatrix X;  // swapped out: returning X_ would copy it (move_into)
-        X.swap(X_);
-        return X;
+        return std::move(X_);
     }
 
   private:
