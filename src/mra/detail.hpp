@@ -11,8 +11,11 @@
 namespace coarsegrain::mra::detail {
 
 /// Number of cells of a grid with `cells` per axis in `dim` dimensions.
+/// (A loop: GCC 12 gives false -Warray-bounds warnings on head(dim).prod() of a Vector3i.)
 inline Index cell_count(const Eigen::Vector3i& cells, int dim) {
-    return cells.head(dim).cast<Index>().prod();
+    Index count = 1;
+    for (int a = 0; a < dim; ++a) count *= cells[a];
+    return count;
 }
 
 /// Node adjacency of a mesh's elements (nodes sharing an element), as CSR: the neighbours of
