@@ -137,24 +137,32 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                               int rings);
 
 /// C̃ = C + X by relaxed cell-wise corrections X (Options::relaxation gamma > 0), #coarse DOFs by
-/// #level-(k+1) DOFs, starting from the canonical basis C Φ^{k+1} (Eq. 6). The constraint
-/// C w = 0 of the exact corrector (cell_localized_z, in the wavelet space) becomes the penalty
-/// |C w|^2 d / (2 gamma), d the smallest diagonal entry of A at an interior node of level k+1 (the
+/// #level-(k+1) DOFs, starting from the canonical basis C Φ^{k+1} (Eq. 6). The constraint that
+/// the corrector's measurements vanish (cell_localized_z, in the wavelet space) becomes the
+/// penalty |G w|^2 d / (2 gamma), with G = C^k C^{k+1} .. C^{q-1} Φ^{k+1,T} (#coarse by
+/// #level-(k+1) DOFs; C itself at the finest step) the measurements of the fine function w
+/// stands for, and d the smallest diagonal entry of A at an interior node of level k+1 (the
 /// softest material's stiffness at the level's scale): the corrector of part T minimizes
-/// w^T A w / 2 + w^T Φ A_T (C Φ)^T + d / (2 gamma) |C w|^2 over the level-(k+1) vectors w
+/// w^T A w / 2 + w^T Φ A_T (C Φ)^T + d / (2 gamma) |G w|^2 over the level-(k+1) vectors w
 /// supported in the box of `rings` rings around T (the DOFs of its nodes but those on a face of the
 /// box inside the grid), i.e. M[S_T, S_T] w = -(Φ A_T (C Φ)^T)[S_T, :] with M = A + (d / gamma)
-/// C^T C, and X = sum_T w^T: the relaxed constraint energy minimization of Chung, Efendiev and
-/// Leung (2018). With boxes spanning the grid, C̃^T = C^T - M^{-1} A C^T = (d / gamma) M^{-1} C^T
-/// C C^T spans M^{-1} C^T = A^{-1} C^T (I + (d / gamma) C A^{-1} C^T)^{-1} (Woodbury): the global
-/// space for every gamma. Localized, the reaction term (d / gamma) C^T C makes the correctors
-/// decay faster. A rigid motion r with nodal values r_c at level k (C^T r_c = r for the linear
+/// G^T G, and X = sum_T w^T: the relaxed constraint energy minimization of Chung, Efendiev and
+/// Leung (2018). With boxes spanning the grid, C̃^T = C^T - M^{-1} A C^T = (d / gamma) M^{-1} G^T
+/// G C^T spans M^{-1} G^T = A^{-1} G^T (I + (d / gamma) G A^{-1} G^T)^{-1} (Woodbury): for every
+/// gamma the space the global solves give with the measurements G, i.e. with global solves at
+/// every step the global hierarchy's level k (the composed measurements are those of the global
+/// construction, whose coefficients are measurements). Measuring C w instead, at a coarser step
+/// after relaxed ones (whose coefficients are not measurements), lost 3-level hierarchies up to
+/// 7x (docs/mra-localization.md). Localized, the reaction term makes the correctors decay
+/// faster. A rigid motion r with nodal values r_c at level k (C^T r_c = r for the linear
 /// refinement) gives sum_i (r_c)_i w_i = 0 in each part (A_T r = 0 where T touches no Dirichlet
 /// DOF), so C̃^T r_c = r without the invariance correction. A: A^{k+1}, both triangles; Phi:
 /// Φ^{k+1} on the present fine DOFs (rows: level-(k+1) DOFs); CPhi = C Φ.
-/// @throws Error if level k+1 has no interior node with all its DOFs (no scale d)
+/// @throws Error if G and C differ in shape, or level k+1 has no interior node with all its DOFs
+/// (no scale d)
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
-                                        const SparseMatrix& Phi, const SparseMatrix& CPhi,
+                                        const SparseMatrix& G, const SparseMatrix& Phi,
+                                        const SparseMatrix& CPhi,
                                         const std::vector<CellStiffness>& parts,
                                         const StepGeometry& g, int rings, double relaxation);
 

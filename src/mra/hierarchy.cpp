@@ -464,6 +464,11 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
     std::vector<Index> finest_next(static_cast<std::size_t>(mesh.num_nodes()));
     std::iota(finest_next.begin(), finest_next.end(), 0);
 
+    // Radius of step k (building level k from k + 1).
+    const auto radius_of = [&](int k) {
+        return options.radius.size() == 1 ? options.radius[0]
+                                          : options.radius[static_cast<std::size_t>(k - 1)];
+    };
     // Rings of the finer level of step k (building level k) in a finite radius (an infinite
     // max_radius: 1e6); a radius on the coarser level's grid is scaled by the ratio of the
     // levels' spacings (2 on grids, the ratio of mean edge lengths on level meshes).
@@ -487,8 +492,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         L.cells = h.cells(k);
         const Eigen::Vector3i fine_cells = h.cells(k + 1);
         const Index fine_count = static_cast<Index>(positions.rows());
-        L.radius = options.radius.size() == 1 ? options.radius[0]
-                                              : options.radius[static_cast<std::size_t>(k - 1)];
+        L.radius = radius_of(k);
         detail::StepGeometry g;
         g.dim = dim;
         g.fine_cells = fine_cells;
@@ -574,7 +578,12 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 mesh, *materials, h.fine_dofs, L.cells, options.patch, options.formulation);
             if (relaxed) {
                 const Phase phase(tag + "C adapted (relaxed cell-localized solves)", &h.timings);
-                Ct = detail::relaxed_adapted_refinement(A, L.C, Phi_present,
+                // The penalty measures the correctors' fine functions: C^k C^{k+1} .. C^{q-1}
+                // Φ^{k+1,T} (C^k at the finest step, where Φ^q = I).
+                SparseMatrix composed = L.C;
+                for (int l = k + 1; l < q; ++l) composed = product(composed, h.level(l).C);
+                if (k < q - 1) composed = product(composed, SparseMatrix(Phi_present.transpose()));
+                Ct = detail::relaxed_adapted_refinement(A, L.C, composed, Phi_present,
                                                         product(L.C, Phi_present), parts, g, rings,
                                                         options.relaxation);
             } else {
@@ -712,9 +721,12 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             Phi = L.Phi;
         }
         L.C_adapted = RunMatrix(Ct);
-        // Φ^k on the present fine DOFs for the next step (Φ^q = I: C̃ itself); none after the
-        // last, where a product would copy C̃ at the build's peak.
-        if (by_cell && k > 1) Phi_present = k == q - 1 ? std::move(Ct) : product(Ct, Phi_present);
+        // Φ^k on the present fine DOFs for the next step if it is cell-localized (Φ^q = I: C̃
+        // itself); none after the last, where a product would copy C̃ at the build's peak.
+        if (by_cell && k > 1 && !std::isinf(radius_of(k - 1)))
+            Phi_present = k == q - 1 ? std::move(Ct) : product(Ct, Phi_present);
+        else
+            Phi_present = SparseMatrix();
         Ct = SparseMatrix();
         L.build_seconds = seconds_since(t0);
         if (k > 1) {

@@ -925,14 +925,18 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
 }
 
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
-                                        const SparseMatrix& Phi, const SparseMatrix& CPhi,
+                                        const SparseMatrix& G, const SparseMatrix& Phi,
+                                        const SparseMatrix& CPhi,
                                         const std::vector<CellStiffness>& parts,
                                         const StepGeometry& g, int rings, double relaxation) {
     const int dim = g.dim;
     const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
     const std::vector<Index> fine_local = fine_local_index(g);
-    const SparseMatrix Ct = C.transpose();
-    SparseMatrix M = A + (soft_diagonal(A, g) / relaxation) * SparseMatrix(Ct * C);
+    CG_VERIFY(G.rows() == C.rows() && G.cols() == C.cols(),
+              "mra: {}x{} penalized measurements for a {}x{} refinement", G.rows(), G.cols(),
+              C.rows(), C.cols());
+    const SparseMatrix Gt = G.transpose();
+    SparseMatrix M = A + (soft_diagonal(A, g) / relaxation) * SparseMatrix(Gt * G);
     M.makeCompressed();
     // The DOFs of the box's nodes but those on a face of the box inside the grid: the functions
     // supported in the box.

@@ -49,13 +49,17 @@ TEST_P(MraCellLocalized, RadiusCoveringTheGridEqualsGlobalSolves) {
 }
 
 TEST_P(MraCellLocalized, RelaxedWithRegionsCoveringTheGridGivesTheGlobalSpace) {
-    // With every region spanning the grid the relaxed C̃^T is (d / gamma) M^{-1} C^T, M = A +
-    // (d / gamma) C^T C, which spans A^{-1} C^T (Woodbury): the global space for every gamma, so
-    // the coarse Galerkin solution is the global one. Its basis differs (C C̃^T != I), so the
-    // solutions are compared, not C̃. Cells alone and in blocks of 2^dim (one corrector per
-    // block). Two levels (below, the coarser steps measure coefficients in another basis of the
-    // same space). Asserted to 1e-8 relative in the energy norm: the
-    // local systems' condition numbers reach ~1e6 at gamma 0.1 with contrast 1e3.
+    // With every region spanning the grid the relaxed C̃^T is (d / gamma) M^{-1} G^T G C^T, M = A
+    // + (d / gamma) G^T G, which spans A^{-1} G^T (Woodbury): for every gamma the space of global
+    // solves with the measurements G. At the finest step G = C; at a coarser one G = C^k ..
+    // C^{q-1} Φ^{k+1,T} measures the fine functions as the global construction's coefficients
+    // do, so with three levels the coarsest space is the global one too (measuring C^k of the
+    // relaxed coefficients instead: 6-23% off in 2D, 46-94% in 3D). Their bases differ (C C̃^T !=
+    // I), so the solutions are compared, not C̃. Cells alone and in blocks of 2^dim (one
+    // corrector per block). Asserted to 1e-8 relative in the energy norm: the local systems'
+    // condition numbers reach ~1e6 at gamma 0.1 with contrast 1e3. Three levels up to gamma 3:
+    // as gamma grows C̃^T = C^T - M^{-1} A C^T shrinks by cancellation, and two relaxed steps
+    // lose digits to it (2D: 1.4e-6 relative at gamma 100, 1.1e-4 at 300).
     const int dim = GetParam();
     const Eigen::Vector3i cells = dim == 2 ? Eigen::Vector3i(8, 8, 1) : Eigen::Vector3i(4, 4, 4);
     const test::GridProblem p = test::hung_problem(dim, cells, 1.0, 1e3, test::checker_pattern);
@@ -64,16 +68,20 @@ TEST_P(MraCellLocalized, RelaxedWithRegionsCoveringTheGridGivesTheGlobalSpace) {
         MultilevelSolver s(h);
         return Vector(s.solve_level(p.f, 1));
     };
-    const Vector u_global = solution(test::exact_options(2, Refinement::Linear));
-    for (const int patch : {1, 2})
-        for (const double gamma : {0.1, 3.0, 100.0}) {
-            Options relaxed = cell_options(2, Refinement::Linear, 8);
-            relaxed.relaxation = gamma;
-            relaxed.patch = patch;
-            const Vector u = solution(relaxed);
-            EXPECT_LT(test::energy_norm(p.K, u - u_global), 1e-8 * test::energy_norm(p.K, u_global))
-                << "gamma " << gamma << " patch " << patch;
-        }
+    for (const int levels : {2, 3}) {
+        const Vector u_global = solution(test::exact_options(levels, Refinement::Linear));
+        for (const int patch : {1, 2})
+            for (const double gamma : {0.1, 3.0, 100.0}) {
+                if (levels == 3 && gamma > 3) continue;
+                Options relaxed = cell_options(levels, Refinement::Linear, 8);
+                relaxed.relaxation = gamma;
+                relaxed.patch = patch;
+                const Vector u = solution(relaxed);
+                EXPECT_LT(test::energy_norm(p.K, u - u_global),
+                          1e-8 * test::energy_norm(p.K, u_global))
+                    << levels << " levels, gamma " << gamma << " patch " << patch;
+            }
+    }
 }
 
 TEST_P(MraCellLocalized, NeedsMaterialsUnclippedPatchesAndNoPenalty) {
