@@ -2,6 +2,7 @@
 // Localized Orthogonal Decomposition), against global solves and node-wise localization.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <limits>
 
@@ -268,7 +269,7 @@ int lattice_inclusions(const Eigen::VectorXd& x) {
 std::pair<double, double> error_and_density(const test::GridProblem& p, const Options& o) {
     const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o, &p.materials);
     MultilevelSolver s(h);
-    const SparseMatrix& C = h.level(1).C_adapted.sparse();
+    const SparseMatrix& C = h.level(h.num_levels() - 1).C_adapted.sparse();  // the finest step's
     return {test::energy_norm(p.K, s.solve_level(p.f, 1) - p.u) / test::energy_norm(p.K, p.u),
             static_cast<double>(C.nonZeros()) / static_cast<double>(C.rows() * C.cols())};
 }
@@ -321,6 +322,37 @@ TEST_P(MraRelaxedSlow, IsolatedInclusionsWithinOneAndAHalfTimesTheGlobalError) {
         std::printf("3D inclusions: relaxed blocks %.4g (%.3f)\n", e_block, d_block);
         EXPECT_LT(e_block, e_relaxed);
     }
+}
+
+/// Cubes of side 1/4 in a checkerboard, stiff where the sum of their indices is even: stiff
+/// inclusions that touch along edges.
+int touching_cubes(const Eigen::VectorXd& x) {
+    int sum = 0;
+    for (int d = 0; d < x.size(); ++d) sum += static_cast<int>(std::floor(4 * x[d]));
+    return sum % 2 == 0 ? 1 : 0;
+}
+
+TEST(MraRelaxedThreeLevelsSlow, TouchingCubesWithinOneAndAHalfTimesTheGlobalError) {
+    // Touching stiff cubes (contrast 1e3) on 16^3 hexes, hung and pulled, three levels (coarsest
+    // 4^3 cells), relaxed 4 rings at both steps, gamma 3. A coarser step's penalty measures the
+    // fine functions (C^1 C^2 Φ^{2,T} w); measuring the coefficients (C^1 w), which after a
+    // relaxed step are not measurements, gave 0.611 (1.87x). Measured: global 0.3273 / density
+    // 0.886; relaxed 0.3363 (1.03x) / 0.161. Asserted: within 1.5x of the global error, the
+    // finest step at most a third as dense.
+    const test::GridProblem p =
+        test::hung_problem(3, Eigen::Vector3i(16, 16, 16), 1.0, 1e3, touching_cubes);
+    Options global;
+    global.levels = 3;
+    Options relaxed = global;
+    relaxed.radius = {4};
+    relaxed.localization = Localization::Cell;
+    relaxed.relaxation = 3;
+    const auto [e_global, d_global] = error_and_density(p, global);
+    const auto [e_relaxed, d_relaxed] = error_and_density(p, relaxed);
+    std::printf("3D touching cubes, 3 levels: global %.4g (density %.3f), relaxed %.4g (%.3f)\n",
+                e_global, d_global, e_relaxed, d_relaxed);
+    EXPECT_LT(e_relaxed, 1.5 * e_global);
+    EXPECT_LT(d_relaxed, d_global / 3);
 }
 
 INSTANTIATE_TEST_SUITE_P(Dims, MraRelaxedSlow, ::testing::Values(2, 3),
