@@ -21,10 +21,11 @@
 /// deformations: each basis function's small deviation from the global one adds up over the
 /// coarse coefficients. Cell-wise localization with relaxed measurements (Options::relaxation)
 /// comes within 1.0-1.3x of the global error on isolated stiff inclusions and checkers (blocks
-/// of 2^3 cells, 6 rings at 16^3 hexes, 8 at 32^3, C̃ 41% and 15% dense against 99%), but the
-/// radius must grow with the grid, and layered beams still lock. docs/mra-localization.md has the
-/// measurements behind each option (accuracy, build time, storage) and the commands that regenerate
-/// them.
+/// of 2^3 cells, 6 rings at 16^3 hexes, 8 at 32^3, C̃ 41% and 15% dense against 99%; with three
+/// levels too), but the radius must grow with the grid, and the layered accordion needs regions
+/// two thirds of its length unit wide each way, as dense as the global basis.
+/// docs/mra-localization.md has the measurements behind each option (accuracy, build time,
+/// storage) and the commands that regenerate them.
 #include <limits>
 #include <string>
 #include <vector>

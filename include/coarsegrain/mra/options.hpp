@@ -138,16 +138,18 @@ struct Options {
     /// patch_clip).
     Localization localization = Localization::Node;
     /// Relaxed measurements gamma (cell localization with finite radii at every step; 0: exact).
-    /// Each cell's corrector replaces the constraint that its measurements vanish, C w = 0, by the
-    /// penalty |C w|^2 d / (2 gamma) (d: the softest material's stiffness on the level), and is
-    /// solved in the level's whole space on the nodes within `radius` rings of the cell, from the
-    /// canonical basis (relaxed constraint energy minimization, Chung, Efendiev and Leung 2018):
-    /// the coarse coefficients are nodal values, not measurements, and C̃ reproduces the rigid
-    /// motions without the invariance correction. The global space is the same for every gamma;
-    /// localized, the correctors decay much faster through soft material around stiff
-    /// inclusions, where the exact ones lock. 16^3 hexes, 216 stiff spheres, 2 levels, 6 rings,
-    /// gamma 3: 1.26x the global energy error (exact constraints at the same storage: 8.6x);
-    /// with patch 2, 1.20x in 0.4x the build, and at 32^3 with 8 rings 1.04x;
+    /// Each cell's corrector replaces the constraint that its measurements vanish by the penalty
+    /// |G w|^2 d / (2 gamma) (G: the measurements of the fine function w stands for, C^k at the
+    /// finest step, C^k .. C^{q-1} Φ^{k+1,T} at coarser ones; d: the softest material's
+    /// stiffness on the level), and is solved in the level's whole space on the nodes within
+    /// `radius` rings of the cell, from the canonical basis (relaxed constraint energy
+    /// minimization, Chung, Efendiev and Leung 2018): the coarse coefficients are nodal values,
+    /// not measurements, and C̃ reproduces the rigid motions without the invariance correction.
+    /// The global space is the same for every gamma; localized, the correctors decay much faster
+    /// through soft material around stiff inclusions, where the exact ones lock. 16^3 hexes, 216
+    /// stiff spheres, 2 levels, 6 rings, gamma 3: 1.26x the global energy error (exact
+    /// constraints at the same storage: 8.6x); with patch 2, 1.20x in 0.4x the build, at 32^3
+    /// with 8 rings 1.04x, and with 3 levels 1.01-1.02x at 16^3 and 24^3;
     /// docs/mra-localization.md, "Relaxed measurements in the library".
     double relaxation = 0;
     Measurement measurement = Measurement::Canonical;
