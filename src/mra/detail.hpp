@@ -153,7 +153,7 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
 /// every step the global hierarchy's level k (the composed measurements are those of the global
 /// construction, whose coefficients are measurements). Measuring C w instead, at a coarser step
 /// after relaxed ones (whose coefficients are not measurements), lost 3-level hierarchies up to
-/// 7x (docs/mra-localization.md). Localized, the reaction term makes the correctors decay
+/// 7.6x (docs/mra-localization.md). Localized, the reaction term makes the correctors decay
 /// faster. A rigid motion r with nodal values r_c at level k (C^T r_c = r for the linear
 /// refinement) gives sum_i (r_c)_i w_i = 0 in each part (A_T r = 0 where T touches no Dirichlet
 /// DOF), so C̃^T r_c = r without the invariance correction. A: A^{k+1}, both triangles; Phi:

@@ -579,10 +579,12 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             if (relaxed) {
                 const Phase phase(tag + "C adapted (relaxed cell-localized solves)", &h.timings);
                 // The penalty measures the correctors' fine functions: C^k C^{k+1} .. C^{q-1}
-                // Φ^{k+1,T} (C^k at the finest step, where Φ^q = I).
+                // Φ^{k+1,T} (C^k at the finest step, where Φ^q = I), formed as the transpose of
+                // Φ^{k+1} (C^k .. C^{q-1})^T so that Φ^{k+1} is not copied.
                 SparseMatrix composed = L.C;
                 for (int l = k + 1; l < q; ++l) composed = product(composed, h.level(l).C);
-                if (k < q - 1) composed = product(composed, SparseMatrix(Phi_present.transpose()));
+                if (k < q - 1)
+                    composed = product(Phi_present, SparseMatrix(composed.transpose())).transpose();
                 Ct = detail::relaxed_adapted_refinement(A, L.C, composed, Phi_present,
                                                         product(L.C, Phi_present), parts, g, rings,
                                                         options.relaxation);
