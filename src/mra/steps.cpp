@@ -829,16 +829,17 @@ class CellSum {
 /// C^† Φ or C Φ; `start` #rows of G by `unknowns`, or empty for none). `op` is symmetric (both
 /// triangles) on `unknowns` unknowns, whose functions over the present fine DOFs are the rows of F;
 /// S_T are the unknowns `in_box` gives for the box of `rings` rings around part T. One
-/// factorization per distinct box (parts whose boxes coincide share it), boxes in parallel
-/// (OpenMP).
+/// factorization per distinct box, boxes in parallel (OpenMP); parts whose boxes coincide share
+/// it, and their right-hand sides of one row are summed (the solve is linear), so a box solves as
+/// many columns as rows touch its parts.
 SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxUnknowns& in_box,
                               const SparseMatrix& F, const SparseMatrix& G,
                               const SparseMatrix& start, const std::vector<CellStiffness>& parts,
                               const StepGeometry& g, int rings) {
     const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
     CellSum X(unknowns, in_box, G, start, parts, g, rings);
-    // Parts whose boxes coincide (clipped by the grid: on a coarse level a box may span it) share
-    // one factorization, their right-hand sides solved together.
+    // Parts whose boxes coincide (clipped by the grid: on a coarse level a box may span it, and a
+    // thin model's cross-section) share one factorization and one right-hand side per row.
     std::map<std::array<int, 6>, std::vector<std::size_t>> by_box;
     for (std::size_t n = 0; n < parts.size(); ++n) {
         const auto [lo, hi] = cell_region(parts[n], rings, nf);
@@ -854,35 +855,40 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
             const auto [lo, hi] = cell_region(parts[group.front()], rings, nf);
             in_box(lo, hi, local, S);
             const Index ns = static_cast<Index>(S.size());
-            // Per part T: F[:, T] A_T G[:, T]^T, over the rows that touch T, as columns of rhs.
-            std::vector<IndexVector> crows(group.size());
-            std::vector<Matrix> blocks(group.size());
-            Index columns = 0;
-            for (std::size_t t = 0; t < group.size(); ++t) {
-                const CellStiffness& part = parts[group[t]];
-                IndexVector frows;
+            // Per part T: F[:, T] A_T G[:, T]^T, over the rows that touch T. The solve is linear
+            // and every part of the group shares S, so the parts' columns of one row are summed
+            // into one right-hand side: as many columns as rows touch the group.
+            std::vector<Index> rows;
+            for (const std::size_t n : group) {
+                const std::vector<Index> touched = touching_rows(G, parts[n].dofs);
+                rows.insert(rows.end(), touched.begin(), touched.end());
+            }
+            std::sort(rows.begin(), rows.end());
+            rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+            if (ns == 0 || rows.empty()) {
+                for (const Index u : S) local[static_cast<std::size_t>(u)] = -1;
+                return;
+            }
+            Matrix rhs = Matrix::Zero(ns, static_cast<Index>(rows.size()));
+            for (const std::size_t n : group) {
+                const CellStiffness& part = parts[n];
+                IndexVector frows, crows;
                 const Matrix ft = column_block(F, part.dofs, frows);
-                const Matrix ct = column_block(G, part.dofs, crows[t]);
-                if (frows.size() == 0 || crows[t].size() == 0) {
-                    crows[t].resize(0);
-                    continue;
-                }
+                const Matrix ct = column_block(G, part.dofs, crows);
+                if (frows.size() == 0 || crows.size() == 0) continue;
                 const Matrix rt = ft * part.A * ct.transpose();
-                blocks[t] = Matrix::Zero(ns, crows[t].size());
-                for (Index r = 0; r < frows.size(); ++r)
-                    if (const Index s = local[static_cast<std::size_t>(frows[r])]; s >= 0)
-                        blocks[t].row(s) = rt.row(r);
-                columns += crows[t].size();
+                std::vector<Index> column(static_cast<std::size_t>(crows.size()));
+                for (Index c = 0; c < crows.size(); ++c)
+                    column[static_cast<std::size_t>(c)] = static_cast<Index>(
+                        std::lower_bound(rows.begin(), rows.end(), crows[c]) - rows.begin());
+                for (Index c = 0; c < crows.size(); ++c)
+                    for (Index r = 0; r < frows.size(); ++r)
+                        if (const Index s = local[static_cast<std::size_t>(frows[r])]; s >= 0)
+                            rhs(s, column[static_cast<std::size_t>(c)]) += rt(r, c);
             }
-            if (ns > 0 && columns > 0) {
-                Matrix rhs(ns, columns);
-                for (std::size_t t = 0, c = 0; t < group.size(); c += crows[t++].size())
-                    rhs.middleCols(static_cast<Index>(c), crows[t].size()) = blocks[t];
-                blocks.clear();
-                const Matrix x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
-                for (std::size_t t = 0, c = 0; t < group.size(); c += crows[t++].size())
-                    X.subtract(x.middleCols(static_cast<Index>(c), crows[t].size()), crows[t], S);
-            }
+            const Matrix x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
+            X.subtract(x, Eigen::Map<const IndexVector>(rows.data(), static_cast<Index>(rows.size())),
+                       S);
             for (const Index u : S) local[static_cast<std::size_t>(u)] = -1;
         });
     return X.take();
