@@ -10,12 +10,15 @@
 #include <mutex>
 #include <utility>
 
+#include <omp.h>
+
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/hash.hpp"
 #include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 #include "detail.hpp"
+#include "products.hpp"
 
 namespace coarsegrain::mra::detail {
 
@@ -497,15 +500,16 @@ SparseMatrix from_region_solutions(std::vector<RegionSolution>& solutions, Index
 }
 
 /// Runs solve(n, scratch) for every region n in [0, count) on all OpenMP threads (dynamic
-/// schedule: regions differ in size), each thread with its own RegionScratch for nw wavelets.
+/// schedule: regions differ in size; serially below min_parallel regions), each thread with its
+/// own RegionScratch for nw wavelets.
 /// The first exception thrown is rethrown after the loop; no region starts after it, as the
 /// throwing thread's scratch is left mid-region (its wavelet indices not reset).
 template <class F>
-void for_each_region(Index count, Index nw, F&& solve) {
+void for_each_region(Index count, Index nw, F&& solve, Index min_parallel = kMinParallelNodes) {
     std::exception_ptr error;
     std::atomic<bool> failed = false;
     std::mutex mutex;
-#pragma omp parallel if (count >= kMinParallelNodes)
+#pragma omp parallel if (count >= min_parallel)
     {
         RegionScratch scratch(nw);
 #pragma omp for schedule(dynamic, 1)
@@ -847,17 +851,41 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
     }
     std::vector<std::vector<std::size_t>> groups;
     for (auto& [box, members] : by_box) groups.push_back(std::move(members));
+    // F[S, T] A_T G[rows, T]^T of part T added to rhs (ns by #rows; rows: sorted, a superset of
+    // those touching T).
+    const auto add_part = [&](const CellStiffness& part, const std::vector<Index>& local,
+                              const std::vector<Index>& rows, Matrix& rhs) {
+        IndexVector frows, crows;
+        const Matrix ft = column_block(F, part.dofs, frows);
+        const Matrix ct = column_block(G, part.dofs, crows);
+        if (frows.size() == 0 || crows.size() == 0) return;
+        // By BLAS: the library's own dense products are compiled for x86-64-v2 (solve::gemm).
+        const Matrix act = part.A * ct.transpose();
+        Matrix rt(ft.rows(), act.cols());
+        solve::gemm(ft, false, act, false, 0.0, rt);
+        for (Index c = 0; c < crows.size(); ++c) {
+            const Index column =
+                std::lower_bound(rows.begin(), rows.end(), crows[c]) - rows.begin();
+            for (Index r = 0; r < frows.size(); ++r)
+                if (const Index s = local[static_cast<std::size_t>(frows[r])]; s >= 0)
+                    rhs(s, column) += rt(r, c);
+        }
+    };
+    // Boxes in parallel; with fewer boxes than threads (a coarse level spanned by a few boxes)
+    // the boxes in turn and each box's parts in parallel.
+    const int threads = omp_get_max_threads();
+    const bool by_part = static_cast<int>(groups.size()) < threads;
     for_each_region(
-        static_cast<Index>(groups.size()), unknowns, [&](Index q, RegionScratch& scratch) {
+        static_cast<Index>(groups.size()), unknowns,
+        [&](Index q, RegionScratch& scratch) {
             const std::vector<std::size_t>& group = groups[static_cast<std::size_t>(q)];
             std::vector<Index>& local = scratch.local;
             std::vector<Index>& S = scratch.S;
             const auto [lo, hi] = cell_region(parts[group.front()], rings, nf);
             in_box(lo, hi, local, S);
             const Index ns = static_cast<Index>(S.size());
-            // Per part T: F[:, T] A_T G[:, T]^T, over the rows that touch T. The solve is linear
-            // and every part of the group shares S, so the parts' columns of one row are summed
-            // into one right-hand side: as many columns as rows touch the group.
+            // Every part of the group shares S and the solve is linear, so the parts' columns of
+            // one row are summed into one right-hand side: as many columns as rows touch the group.
             std::vector<Index> rows;
             for (const std::size_t n : group) {
                 const std::vector<Index> touched = touching_rows(G, parts[n].dofs);
@@ -865,32 +893,38 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
             }
             std::sort(rows.begin(), rows.end());
             rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-            if (ns == 0 || rows.empty()) {
-                for (const Index u : S) local[static_cast<std::size_t>(u)] = -1;
-                return;
+            if (ns > 0 && !rows.empty()) {
+                Matrix rhs = Matrix::Zero(ns, static_cast<Index>(rows.size()));
+                if (!by_part || group.size() == 1) {
+                    for (const std::size_t n : group) add_part(parts[n], local, rows, rhs);
+                } else {
+                    std::exception_ptr error;
+                    std::mutex mutex;
+#pragma omp parallel
+                    {
+                        Matrix own = Matrix::Zero(ns, rhs.cols());
+#pragma omp for schedule(dynamic, 1)
+                        for (std::size_t t = 0; t < group.size(); ++t) {
+                            try {
+                                add_part(parts[group[t]], local, rows, own);
+                            } catch (...) {
+                                const std::lock_guard<std::mutex> lock(mutex);
+                                if (!error) error = std::current_exception();
+                            }
+                        }
+                        const std::lock_guard<std::mutex> lock(mutex);
+                        rhs += own;
+                    }
+                    if (error) std::rethrow_exception(error);
+                }
+                const Matrix x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
+                X.subtract(
+                    x, Eigen::Map<const IndexVector>(rows.data(), static_cast<Index>(rows.size())),
+                    S);
             }
-            Matrix rhs = Matrix::Zero(ns, static_cast<Index>(rows.size()));
-            for (const std::size_t n : group) {
-                const CellStiffness& part = parts[n];
-                IndexVector frows, crows;
-                const Matrix ft = column_block(F, part.dofs, frows);
-                const Matrix ct = column_block(G, part.dofs, crows);
-                if (frows.size() == 0 || crows.size() == 0) continue;
-                const Matrix rt = ft * part.A * ct.transpose();
-                std::vector<Index> column(static_cast<std::size_t>(crows.size()));
-                for (Index c = 0; c < crows.size(); ++c)
-                    column[static_cast<std::size_t>(c)] = static_cast<Index>(
-                        std::lower_bound(rows.begin(), rows.end(), crows[c]) - rows.begin());
-                for (Index c = 0; c < crows.size(); ++c)
-                    for (Index r = 0; r < frows.size(); ++r)
-                        if (const Index s = local[static_cast<std::size_t>(frows[r])]; s >= 0)
-                            rhs(s, column[static_cast<std::size_t>(c)]) += rt(r, c);
-            }
-            const Matrix x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
-            X.subtract(x, Eigen::Map<const IndexVector>(rows.data(), static_cast<Index>(rows.size())),
-                       S);
             for (const Index u : S) local[static_cast<std::size_t>(u)] = -1;
-        });
+        },
+        by_part ? static_cast<Index>(groups.size()) + 1 : 2);
     return X.take();
 }
 
@@ -942,7 +976,7 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
               "mra: {}x{} penalized measurements for a {}x{} refinement", G.rows(), G.cols(),
               C.rows(), C.cols());
     const SparseMatrix Gt = G.transpose();
-    SparseMatrix M = A + (soft_diagonal(A, g) / relaxation) * SparseMatrix(Gt * G);
+    SparseMatrix M = A + (soft_diagonal(A, g) / relaxation) * product(Gt, G);
     M.makeCompressed();
     // The DOFs of the box's nodes but those on a face of the box inside the grid: the functions
     // supported in the box.
