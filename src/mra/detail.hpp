@@ -18,6 +18,12 @@ inline Index cell_count(const Eigen::Vector3i& cells, int dim) {
     return count;
 }
 
+/// A cell-wise region (Localization::Cell) is extended to the grid's boundary where it would leave
+/// at most rings / kRegionSnap node layers out: a box a few layers short of the boundary clamps
+/// what spans it (a layered beam's stiff plates across its section). 48x12x12 accordion, 3 levels,
+/// relaxed, 6 rings: coarsest error 0.0169 -> 0.0024 (global 0.0027).
+constexpr int kRegionSnap = 3;
+
 /// Node adjacency of a mesh's elements (nodes sharing an element), as CSR: the neighbours of
 /// node j are neighbours[first[j] .. first[j + 1]).
 struct NodeGraph {

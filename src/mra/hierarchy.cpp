@@ -672,19 +672,18 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 std::fill(skip.begin(), skip.end(), 1);
             // Cell localization: node i gets rows from the cells T that (C^† Φ^{k+1})[i, :]
             // touches, within phi_reach (+1 for the linear C^†) of node i, and a cell's region
-            // reaches `rings` beyond the cell's patch (rings / 2 more where it is extended to the
-            // grid's boundary), 2 patch rings beyond its nodes.
+            // reaches `rings` beyond the cell's patch (rings / kRegionSnap more where it is
+            // extended to the grid's boundary), 2 patch rings beyond its nodes.
             const int linear = options.refinement == Refinement::Linear ? 1 : 0;
             const int max_region_rings =
                 L.region_rings.empty()
                     ? rings
                     : *std::max_element(L.region_rings.begin(), L.region_rings.end());
-            const int reach =
-                by_cell
-                    ? rings + rings / 2 + 2 * options.patch + basis_reach(h, Phi_present, k + 1) +
-                          2 * linear
-                    : max_region_rings + (options.patch_clip ? 0 : 2 * (options.patch - 1)) +
-                          linear;
+            const int reach = by_cell
+                                  ? rings + rings / detail::kRegionSnap + 2 * options.patch +
+                                        basis_reach(h, Phi_present, k + 1) + 2 * linear
+                                  : max_region_rings +
+                                        (options.patch_clip ? 0 : 2 * (options.patch - 1)) + linear;
             const Eigen::Vector3i nf = node_counts(fine_cells, dim);
             std::vector<char> mark(on_grid ? 0 : static_cast<std::size_t>(fine_count), 0);
             SparseMatrix Wt;  // W by rows, on level meshes

@@ -1,3 +1,5 @@
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -9,8 +11,6 @@
 #include <map>
 #include <mutex>
 #include <utility>
-
-#include <omp.h>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/hash.hpp"
@@ -36,10 +36,6 @@ constexpr Index kGlobalBlock = 64;
 /// kMinParallelNodes counts regions of localized solves.
 constexpr Index kMinParallelNodes = 64;
 constexpr Index kMinParallelColumns = 4096;
-
-/// A cell-wise region is extended to the grid's boundary where it leaves at most rings /
-/// kRegionSnap node layers out (cell_region).
-constexpr int kRegionSnap = 3;
 
 /// Local systems up to kDenseLocalLimit unknowns, or up to kDenseLocalMax with more than
 /// kDenseLocalDensity of their entries nonzero, are factorized densely (LAPACK), others by
@@ -714,7 +710,7 @@ namespace {
 
 /// The region of part T: the level-(k+1) nodes within `rings` of T (its nodes 2c .. 2c + 2 span,
 /// c its first cell), as a box [lo, hi] of the grid of nf nodes, extended to the grid's boundary
-/// where it would leave at most rings / 2 node layers out (kRegionSnap). Boxes then coincide
+/// where it would leave at most rings / kRegionSnap node layers out. Boxes then coincide
 /// across a model thinner than about three radii, and share their factorization
 /// (cell_corrections): on the 64x16x16 accordion's finest step at 11 rings, 16 boxes instead of
 /// 144, each across the whole section.
