@@ -102,6 +102,11 @@ inline int checker_pattern(const Eigen::VectorXd& x) {
     return s > 0 ? 1 : 0;
 }
 
+/// Layers of thickness 0.25 across y, stiff (id 1) first: plates spanning a column's section.
+inline int layers_across_y(const Eigen::VectorXd& x) {
+    return static_cast<int>(std::floor(x[1] / 0.25)) % 2 == 0 ? 1 : 0;
+}
+
 /// Test name of a (dimension, refinement) parameter: "2D_dirac", "3D_linear", ...
 inline std::string dim_refinement_label(const std::tuple<int, mra::Refinement>& p) {
     return std::to_string(std::get<0>(p)) + "D_" + mra::refinement_name(std::get<1>(p));

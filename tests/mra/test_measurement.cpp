@@ -12,11 +12,6 @@
 namespace coarsegrain::mra {
 namespace {
 
-/// Layers of thickness 0.25 across y, stiff (id 1) first.
-int layers_across_y(const Eigen::VectorXd& x) {
-    return static_cast<int>(std::floor(x[1] / 0.25)) % 2 == 0 ? 1 : 0;
-}
-
 Options stiffness_options(int levels) {
     Options o = test::exact_options(levels, Refinement::Linear);
     o.measurement = Measurement::Stiffness;
@@ -112,7 +107,7 @@ TEST(MraMeasurementLocalized, StiffnessWeightsLocalizeALayeredColumn) {
     // cell-wise error within 1.5x of its global one and below a third
     // of the canonical cell-wise error.
     const test::GridProblem p = test::hung_problem(2, Eigen::Vector3i(8, 32, 1), 1e4, 1e7,
-                                                   layers_across_y, Eigen::Vector3d(1, 4, 1));
+                                                   test::layers_across_y, Eigen::Vector3d(1, 4, 1));
     Options cc = test::exact_options(2, Refinement::Linear);
     const double canonical_global = coarsest_error(p, cc);
     cc.radius = {8};
