@@ -845,11 +845,15 @@ class CellSum {
 /// S_T are the unknowns `in_box` gives for the box of `rings` rings around part T. One
 /// factorization per distinct box, boxes in parallel (OpenMP); parts whose boxes coincide share
 /// it, and their right-hand sides of one row are summed (the solve is linear), so a box solves as
-/// many columns as rows touch its parts.
+/// many columns as rows touch its parts. Where one box holds every part and every unknown, and
+/// `whole` is given, its right-hand side is whole(rows) = (F A G^T)[:, rows] (sum_T A_T = A, the
+/// fine operator): on a coarse level the sum over the parts' fine elements costs more than the
+/// whole step.
+using WholeRhs = std::function<Matrix(const std::vector<Index>& rows)>;
 SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxUnknowns& in_box,
                               const SparseMatrix& F, const SparseMatrix& G,
                               const SparseMatrix& start, const std::vector<CellStiffness>& parts,
-                              const StepGeometry& g, int rings) {
+                              const StepGeometry& g, int rings, const WholeRhs& whole = {}) {
     const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
     CellSum X(unknowns, in_box, G, start, parts, g, rings);
     // Parts whose boxes coincide (clipped by the grid: on a coarse level a box may span it, and a
@@ -905,7 +909,9 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
             rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
             if (ns > 0 && !rows.empty()) {
                 Matrix rhs = Matrix::Zero(ns, static_cast<Index>(rows.size()));
-                if (!by_part || group.size() == 1) {
+                if (whole && groups.size() == 1 && ns == unknowns) {
+                    rhs = whole(rows);
+                } else if (!by_part || group.size() == 1) {
                     for (const std::size_t n : group) add_part(parts[n], local, rows, rhs);
                 } else {
                     std::exception_ptr error;
@@ -1011,8 +1017,20 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
         for (std::size_t s = 0; s < S.size(); ++s)
             local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
     };
+    // Every part in one box spanning the level: Φ A^q (C Φ)^T = A C^T (A = Φ A^q Φ^T), column q
+    // the sum of A's columns i weighted by C[rows[q], i].
+    const WholeRhs whole = [&](const std::vector<Index>& rows) {
+        const SparseMatrix Ct = C.transpose();
+        Matrix rhs = Matrix::Zero(A.rows(), static_cast<Index>(rows.size()));
+#pragma omp parallel for schedule(dynamic, 16)
+        for (std::size_t q = 0; q < rows.size(); ++q)
+            for (SparseMatrix::InnerIterator c(Ct, rows[q]); c; ++c)
+                for (SparseMatrix::InnerIterator a(A, c.row()); a; ++a)
+                    rhs(a.row(), static_cast<Index>(q)) += a.value() * c.value();
+        return rhs;
+    };
     return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, CPhi, C, parts, g,
-                            rings);
+                            rings, whole);
 }
 
 SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
