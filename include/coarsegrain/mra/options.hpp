@@ -106,7 +106,10 @@ struct Options {
     Refinement refinement = Refinement::Linear;
     /// Localization radius rho of step k (building level k from k+1) is radius[k-1], or
     /// radius[0] for every step if radius has one entry. Infinity: global solves (one CHOLMOD
-    /// factorization of B^k for all columns of Z).
+    /// factorization of B^k for all columns of Z). With Localization::Cell a region within
+    /// rho / 3 rings of the grid's boundary is extended to it; with relaxation, a radius that
+    /// spans the level (rho at least the finer level's cells per axis) makes that step exact, one
+    /// factorization for all its parts, measuring the fine functions of the relaxed steps below.
     std::vector<double> radius = {std::numeric_limits<double>::infinity()};
     RadiusGrid radius_grid = RadiusGrid::Fine;
     /// Eq. 12 defect-driven radius (node localization, finite radii; 0: off). The localized
