@@ -889,6 +889,35 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
     // the boxes in turn and each box's parts in parallel.
     const int threads = omp_get_max_threads();
     const bool by_part = static_cast<int>(groups.size()) < threads;
+    // The sum of add_part over a group's parts (ns by #rows).
+    const auto parts_rhs = [&](const std::vector<std::size_t>& group,
+                               const std::vector<Index>& local, const std::vector<Index>& rows,
+                               Index ns) {
+        Matrix rhs = Matrix::Zero(ns, static_cast<Index>(rows.size()));
+        if (!by_part || group.size() == 1) {
+            for (const std::size_t n : group) add_part(parts[n], local, rows, rhs);
+            return rhs;
+        }
+        std::exception_ptr error;
+        std::mutex mutex;
+#pragma omp parallel
+        {
+            Matrix own = Matrix::Zero(ns, rhs.cols());
+#pragma omp for schedule(dynamic, 1)
+            for (std::size_t t = 0; t < group.size(); ++t) {
+                try {
+                    add_part(parts[group[t]], local, rows, own);
+                } catch (...) {
+                    const std::lock_guard<std::mutex> lock(mutex);
+                    if (!error) error = std::current_exception();
+                }
+            }
+            const std::lock_guard<std::mutex> lock(mutex);
+            rhs += own;
+        }
+        if (error) std::rethrow_exception(error);
+        return rhs;
+    };
     for_each_region(
         static_cast<Index>(groups.size()), unknowns,
         [&](Index q, RegionScratch& scratch) {
@@ -908,31 +937,9 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
             std::sort(rows.begin(), rows.end());
             rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
             if (ns > 0 && !rows.empty()) {
-                Matrix rhs = Matrix::Zero(ns, static_cast<Index>(rows.size()));
-                if (whole && groups.size() == 1 && ns == unknowns) {
-                    rhs = whole(rows);
-                } else if (!by_part || group.size() == 1) {
-                    for (const std::size_t n : group) add_part(parts[n], local, rows, rhs);
-                } else {
-                    std::exception_ptr error;
-                    std::mutex mutex;
-#pragma omp parallel
-                    {
-                        Matrix own = Matrix::Zero(ns, rhs.cols());
-#pragma omp for schedule(dynamic, 1)
-                        for (std::size_t t = 0; t < group.size(); ++t) {
-                            try {
-                                add_part(parts[group[t]], local, rows, own);
-                            } catch (...) {
-                                const std::lock_guard<std::mutex> lock(mutex);
-                                if (!error) error = std::current_exception();
-                            }
-                        }
-                        const std::lock_guard<std::mutex> lock(mutex);
-                        rhs += own;
-                    }
-                    if (error) std::rethrow_exception(error);
-                }
+                const Matrix rhs = whole && groups.size() == 1 && ns == unknowns
+                                       ? whole(rows)
+                                       : parts_rhs(group, local, rows, ns);
                 const Matrix x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
                 X.subtract(
                     x, Eigen::Map<const IndexVector>(rows.data(), static_cast<Index>(rows.size())),
