@@ -163,12 +163,13 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
 /// faster. A rigid motion r with nodal values r_c at level k (C^T r_c = r for the linear
 /// refinement) gives sum_i (r_c)_i w_i = 0 in each part (A_T r = 0 where T touches no Dirichlet
 /// DOF), so C̃^T r_c = r without the invariance correction. A: A^{k+1}, both triangles; Phi:
-/// Φ^{k+1} on the present fine DOFs (rows: level-(k+1) DOFs); CPhi = C Φ.
+/// Φ^{k+1} on the present fine DOFs (rows: level-(k+1) DOFs). Where every region spans the level
+/// the parts' right-hand sides sum to A C^T (sum_T A_T = A^q), and C̃ = C - (M^{-1} A C^T)^T is
+/// one solve.
 /// @throws Error if G and C differ in shape, or level k+1 has no interior node with all its DOFs
 /// (no scale d)
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
                                         const SparseMatrix& G, const SparseMatrix& Phi,
-                                        const SparseMatrix& CPhi,
                                         const std::vector<CellStiffness>& parts,
                                         const StepGeometry& g, int rings, double relaxation);
 

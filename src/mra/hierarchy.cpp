@@ -586,9 +586,8 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 for (int l = k + 1; l < q; ++l) composed = product(composed, h.level(l).C);
                 if (k < q - 1)
                     composed = product(Phi_present, SparseMatrix(composed.transpose())).transpose();
-                Ct = detail::relaxed_adapted_refinement(A, L.C, composed, Phi_present,
-                                                        product(L.C, Phi_present), parts, g, rings,
-                                                        options.relaxation);
+                Ct = detail::relaxed_adapted_refinement(A, L.C, composed, Phi_present, parts, g,
+                                                        rings, options.relaxation);
             } else {
                 SparseMatrix Z;
                 {

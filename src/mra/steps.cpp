@@ -845,15 +845,11 @@ class CellSum {
 /// S_T are the unknowns `in_box` gives for the box of `rings` rings around part T. One
 /// factorization per distinct box, boxes in parallel (OpenMP); parts whose boxes coincide share
 /// it, and their right-hand sides of one row are summed (the solve is linear), so a box solves as
-/// many columns as rows touch its parts. Where one box holds every part and every unknown, and
-/// `whole` is given, its right-hand side is whole(rows) = (F A G^T)[:, rows] (sum_T A_T = A, the
-/// fine operator): on a coarse level the sum over the parts' fine elements costs more than the
-/// whole step.
-using WholeRhs = std::function<Matrix(const std::vector<Index>& rows)>;
+/// many columns as rows touch its parts.
 SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxUnknowns& in_box,
                               const SparseMatrix& F, const SparseMatrix& G,
                               const SparseMatrix& start, const std::vector<CellStiffness>& parts,
-                              const StepGeometry& g, int rings, const WholeRhs& whole = {}) {
+                              const StepGeometry& g, int rings) {
     const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
     CellSum X(unknowns, in_box, G, start, parts, g, rings);
     // Parts whose boxes coincide (clipped by the grid: on a coarse level a box may span it, and a
@@ -937,9 +933,7 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
             std::sort(rows.begin(), rows.end());
             rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
             if (ns > 0 && !rows.empty()) {
-                const Matrix rhs = whole && groups.size() == 1 && ns == unknowns
-                                       ? whole(rows)
-                                       : parts_rhs(group, local, rows, ns);
+                const Matrix rhs = parts_rhs(group, local, rows, ns);
                 const Matrix x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
                 X.subtract(
                     x, Eigen::Map<const IndexVector>(rows.data(), static_cast<Index>(rows.size())),
@@ -989,7 +983,6 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
 
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
                                         const SparseMatrix& G, const SparseMatrix& Phi,
-                                        const SparseMatrix& CPhi,
                                         const std::vector<CellStiffness>& parts,
                                         const StepGeometry& g, int rings, double relaxation) {
     const int dim = g.dim;
@@ -1024,20 +1017,24 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
         for (std::size_t s = 0; s < S.size(); ++s)
             local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
     };
-    // Every part in one box spanning the level: Φ A^q (C Φ)^T = A C^T (A = Φ A^q Φ^T), column q
-    // the sum of A's columns i weighted by C[rows[q], i].
-    const WholeRhs whole = [&](const std::vector<Index>& rows) {
-        const SparseMatrix Ct = C.transpose();
-        Matrix rhs = Matrix::Zero(A.rows(), static_cast<Index>(rows.size()));
-#pragma omp parallel for schedule(dynamic, 16)
-        for (std::size_t q = 0; q < rows.size(); ++q)
-            for (SparseMatrix::InnerIterator c(Ct, rows[q]); c; ++c)
-                for (SparseMatrix::InnerIterator a(A, c.row()); a; ++a)
-                    rhs(a.row(), static_cast<Index>(q)) += a.value() * c.value();
-        return rhs;
-    };
-    return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, CPhi, C, parts, g,
-                            rings, whole);
+    // Every region spanning the level: the parts' right-hand sides sum to Φ A^q (C Φ)^T = A C^T
+    // (sum_T A_T = A^q, A = Φ A^q Φ^T), solved at once: C̃ = C - (M^{-1} A C^T)^T, without
+    // forming C Φ (on a coarse level the sum over the parts' fine elements costs more than the
+    // step).
+    const bool spanning = std::all_of(parts.begin(), parts.end(), [&](const CellStiffness& part) {
+        const auto [lo, hi] = cell_region(part, rings, nf);
+        return lo.isZero() && hi == (nf.array() - 1).matrix();
+    });
+    if (spanning) {
+        solve::SpdSolver solver;
+        solver.compute(M);
+        const Matrix x = solver.solve(Matrix(A * SparseMatrix(C.transpose())));
+        SparseMatrix Ct = (Matrix(C) - x.transpose()).sparseView(0.0, 0.0);
+        Ct.makeCompressed();
+        return Ct;
+    }
+    return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, product(C, Phi), C,
+                            parts, g, rings);
 }
 
 SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
