@@ -470,6 +470,19 @@ SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y) {
     return dense_product_pays(X, Y) ? dense_product(X, Y) : sparse_product(X, Y);
 }
 
+Matrix sparse_times_dense(const SparseMatrix& X, const Eigen::Ref<const Matrix>& Y) {
+    CG_VERIFY(X.cols() == Y.rows(), "mra: product of a {}x{} sparse and a {}x{} dense matrix",
+              X.rows(), X.cols(), Y.rows(), Y.cols());
+    Matrix P(X.rows(), Y.cols());
+    if (dense_pays(X) && entries(X) <= kDenseProductMaxEntries) {
+        solve::gemm(Matrix(X), false, Y, false, 0.0, P);
+        return P;
+    }
+#pragma omp parallel for schedule(dynamic, 16)
+    for (Index j = 0; j < Y.cols(); ++j) P.col(j).noalias() = X * Y.col(j);
+    return P;
+}
+
 SparseMatrix triple_product(const SparseMatrix& W, const SparseMatrix& A, const SparseMatrix& Y) {
     CG_VERIFY(W.cols() == A.rows() && A.cols() == Y.rows(),
               "mra: triple product of {}x{}, {}x{} and {}x{} matrices", W.rows(), W.cols(),

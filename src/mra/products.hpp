@@ -14,6 +14,11 @@ namespace coarsegrain::mra::detail {
 /// factorizations across regions on that); the dense one stores nonzeros only.
 SparseMatrix product(const SparseMatrix& X, const SparseMatrix& Y);
 
+/// X Y for a sparse X and a dense Y: by BLAS through a dense copy of X where that pays (at most
+/// 6e7 entries, kSparseDensePenalty), else column by column of Y in parallel (OpenMP).
+/// @throws Error on mismatched sizes
+Matrix sparse_times_dense(const SparseMatrix& X, const Eigen::Ref<const Matrix>& Y);
+
 /// W A Y (m x n for W m x k, A k x k', Y k' x n) without forming A Y: column j is W (A Y[:, j]),
 /// accumulated densely per thread (OpenMP over the columns), in two passes, the pattern's size
 /// then the values, so the result is allocated once at its size (sparse_product holds its

@@ -981,6 +981,43 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                             parts, g, rings);
 }
 
+SparseMatrix spanning_relaxed_refinement(const SparseMatrix& A, const SparseMatrix& C,
+                                         const SparseMatrix& G, double penalty) {
+    CG_VERIFY(A.rows() == A.cols() && C.cols() == A.rows() && G.rows() == C.rows() &&
+                  G.cols() == C.cols() && penalty > 0,
+              "mra: spanning relaxed step with a {}x{} operator, {}x{} refinement, {}x{} "
+              "measurements and penalty {}",
+              A.rows(), A.cols(), C.rows(), C.cols(), G.rows(), G.cols(), penalty);
+    const SparseMatrix Ct = C.transpose();
+    solve::SpdSolver solver;
+    bool definite = true;
+    try {
+        solver.compute(A);
+    } catch (const NotPositiveDefinite&) {
+        definite = false;
+    }
+    Matrix x(C.cols(), C.rows());  // C̃^T
+    if (definite) {
+        const Matrix Y = solver.solve(Matrix(G.transpose()));  // A^{-1} G^T
+        Matrix S = sparse_times_dense(G, Y);
+        S.diagonal().array() += 1.0 / penalty;
+        solve::DenseCholesky S_factor;
+        CG_VERIFY(S_factor.compute(std::move(S)) == 0,
+                  "mra: spanning relaxed step: I / {} + G A^-1 G^T ({} measurements) lost its "
+                  "definiteness to round-off",
+                  penalty, G.rows());
+        solve::gemm(Y, false, S_factor.solve(Matrix(product(G, Ct))), false, 0.0, x);
+    } else {
+        SparseMatrix M = A + penalty * product(SparseMatrix(G.transpose()), G);
+        M.makeCompressed();
+        solver.compute(M);
+        x = Matrix(Ct) - solver.solve(Matrix(A * Ct));
+    }
+    SparseMatrix out = x.transpose().sparseView(0.0, 0.0);
+    out.makeCompressed();
+    return out;
+}
+
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
                                         const SparseMatrix& G, const SparseMatrix& Phi,
                                         const std::vector<CellStiffness>& parts,
@@ -991,9 +1028,7 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     CG_VERIFY(G.rows() == C.rows() && G.cols() == C.cols(),
               "mra: {}x{} penalized measurements for a {}x{} refinement", G.rows(), G.cols(),
               C.rows(), C.cols());
-    const SparseMatrix Gt = G.transpose();
-    SparseMatrix M = A + (soft_diagonal(A, g) / relaxation) * product(Gt, G);
-    M.makeCompressed();
+    const double penalty = soft_diagonal(A, g) / relaxation;
     // The DOFs of the box's nodes but those on a face of the box inside the grid: the functions
     // supported in the box.
     const BoxUnknowns interior = [&](const Eigen::Vector3i& lo, const Eigen::Vector3i& hi,
@@ -1018,21 +1053,15 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
             local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
     };
     // Every region spanning the level: the parts' right-hand sides sum to Φ A^q (C Φ)^T = A C^T
-    // (sum_T A_T = A^q, A = Φ A^q Φ^T), solved at once: C̃ = C - (M^{-1} A C^T)^T, without
-    // forming C Φ (on a coarse level the sum over the parts' fine elements costs more than the
-    // step).
+    // (sum_T A_T = A^q, A = Φ A^q Φ^T), solved at once, without forming C Φ (on a coarse level
+    // the sum over the parts' fine elements costs more than the step).
     const bool spanning = std::all_of(parts.begin(), parts.end(), [&](const CellStiffness& part) {
         const auto [lo, hi] = cell_region(part, rings, nf);
         return lo.isZero() && hi == (nf.array() - 1).matrix();
     });
-    if (spanning) {
-        solve::SpdSolver solver;
-        solver.compute(M);
-        const Matrix x = solver.solve(Matrix(A * SparseMatrix(C.transpose())));
-        SparseMatrix Ct = (Matrix(C) - x.transpose()).sparseView(0.0, 0.0);
-        Ct.makeCompressed();
-        return Ct;
-    }
+    if (spanning) return spanning_relaxed_refinement(A, C, G, penalty);
+    SparseMatrix M = A + penalty * product(SparseMatrix(G.transpose()), G);
+    M.makeCompressed();
     return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, product(C, Phi), C,
                             parts, g, rings);
 }
