@@ -165,13 +165,17 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
 /// DOF), so C̃^T r_c = r without the invariance correction. A: A^{k+1}, both triangles; Phi:
 /// Φ^{k+1} on the present fine DOFs (rows: level-(k+1) DOFs). Where every region spans the level
 /// the parts' right-hand sides sum to A C^T (sum_T A_T = A^q), and C̃ = C - (M^{-1} A C^T)^T is
-/// one solve.
+/// one solve (spanning_relaxed_refinement), which does not read Phi (it may be empty).
 /// @throws Error if G and C differ in shape, or level k+1 has no interior node with all its DOFs
 /// (no scale d)
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
                                         const SparseMatrix& G, const SparseMatrix& Phi,
                                         const std::vector<CellStiffness>& parts,
                                         const StepGeometry& g, int rings, double relaxation);
+
+/// Whether the region of every part (`rings` rings around it, reaching the grid's boundary where
+/// at most rings / kRegionSnap short) is the whole level k+1.
+bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, const StepGeometry& g);
 
 /// C̃ = C - (M^{-1} A C^T)^T with M = A + penalty G^T G: the relaxed step whose every region spans
 /// the level (relaxed_adapted_refinement). M^{-1} A C^T = C^T - penalty M^{-1} G^T G C^T, and by

@@ -981,6 +981,14 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                             parts, g, rings);
 }
 
+bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, const StepGeometry& g) {
+    const Eigen::Vector3i nf = node_counts(g.fine_cells, g.dim);
+    return std::all_of(parts.begin(), parts.end(), [&](const CellStiffness& part) {
+        const auto [lo, hi] = cell_region(part, rings, nf);
+        return lo.isZero() && hi == (nf.array() - 1).matrix();
+    });
+}
+
 SparseMatrix spanning_relaxed_refinement(const SparseMatrix& A, const SparseMatrix& C,
                                          const SparseMatrix& G, double penalty) {
     CG_VERIFY(A.rows() == A.cols() && C.cols() == A.rows() && G.rows() == C.rows() &&
@@ -1055,11 +1063,8 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     // Every region spanning the level: the parts' right-hand sides sum to Φ A^q (C Φ)^T = A C^T
     // (sum_T A_T = A^q, A = Φ A^q Φ^T), solved at once, without forming C Φ (on a coarse level
     // the sum over the parts' fine elements costs more than the step).
-    const bool spanning = std::all_of(parts.begin(), parts.end(), [&](const CellStiffness& part) {
-        const auto [lo, hi] = cell_region(part, rings, nf);
-        return lo.isZero() && hi == (nf.array() - 1).matrix();
-    });
-    if (spanning) return spanning_relaxed_refinement(A, C, G, penalty);
+    if (regions_span_level(parts, rings, g)) return spanning_relaxed_refinement(A, C, G, penalty);
+    CG_ASSERT(Phi.rows() == A.rows(), "mra: relaxed step without its fine functions");
     SparseMatrix M = A + penalty * product(SparseMatrix(G.transpose()), G);
     M.makeCompressed();
     return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, product(C, Phi), C,
