@@ -109,7 +109,8 @@ struct Options {
     /// factorization of B^k for all columns of Z). With Localization::Cell a region within
     /// rho / 3 rings of the grid's boundary is extended to it; with relaxation, a radius that
     /// spans the level (rho at least the finer level's cells per axis) makes that step exact, one
-    /// factorization for all its parts, measuring the fine functions of the relaxed steps below.
+    /// factorization for all its parts (of A^{k+1}, by Woodbury, where Dirichlet conditions hold
+    /// the model), measuring the fine functions of the relaxed steps below.
     std::vector<double> radius = {std::numeric_limits<double>::infinity()};
     RadiusGrid radius_grid = RadiusGrid::Fine;
     /// Eq. 12 defect-driven radius (node localization, finite radii; 0: off). The localized
