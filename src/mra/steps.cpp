@@ -311,7 +311,10 @@ Matrix solve_region(const SparseMatrix& B, const std::vector<Index>& S,
                     const std::vector<Index>& local, const Matrix& rhs, int dim,
                     RegionScratch& scratch, std::size_t attempt, bool patterns_repeat) {
     const Index ns = static_cast<Index>(S.size());
-    const auto [nnz, hash] = block_pattern(B, S, local);
+    // Named, not bound: clang 14 cannot capture structured bindings (the order lookup below).
+    const std::pair<Index, std::uint64_t> pattern = block_pattern(B, S, local);
+    const Index nnz = pattern.first;
+    const std::uint64_t hash = pattern.second;
     const double n = static_cast<double>(ns);
     if (ns <= kDenseLocalLimit ||
         (ns <= kDenseLocalMax && static_cast<double>(nnz) > kDenseLocalDensity * n * n)) {
