@@ -605,7 +605,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                     composed = product(Phi_present, SparseMatrix(composed.transpose())).transpose();
                 // A step whose regions span the level reads Φ^{k+1} no further: C̃^{q-1}, if
                 // that is what it is, is stored as runs before the step's solves instead of
-                // after the step (80x20x20 accordion, 3 levels: peak 13.7 -> 11.4 GB).
+                // after the step (80x20x20 accordion, 3 levels: peak 13.7 -> 11.0 GB).
                 if (runs_pending && !phi_read_after &&
                     detail::regions_span_level(parts, rings, g)) {
                     h.levels[static_cast<std::size_t>(q - 2)].C_adapted = RunMatrix(Phi_present);
