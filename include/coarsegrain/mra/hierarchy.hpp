@@ -25,8 +25,8 @@
 /// levels too), but the radius must grow with the grid. On the layered accordion (three levels,
 /// the coarse step's regions spanning its level, the fine step's half a length unit each way and
 /// across the section) it beats the global error in less time (64x16x16: 0.23x in 0.44x, C̃ 0.6x
-/// as dense); at 80x20x20 a quarter of a length unit gives 1.48x with C̃ 0.30x as dense, in a
-/// quarter of the build and half the memory.
+/// as dense); with 5 fine rings it is 0.78x at 64x16x16 and 1.48x at 80x20x20 with C̃ 0.28-0.30x
+/// as dense, in a quarter of the build and half the memory or less (48x12x12 needs 6 rings).
 /// docs/mra-localization.md has the measurements behind each option (accuracy, build time,
 /// storage) and the commands that regenerate them.
 #include <limits>
