@@ -490,6 +490,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
     const SparseMatrix* A_next = K ? &h.A_fine : A_free;
     SparseMatrix A_full;
     bool runs_pending = false;  // C̃^{q-1} is still Phi_present, not yet L.C_adapted
+    const auto store_pending_runs = [&] {
+        h.levels[static_cast<std::size_t>(q - 2)].C_adapted = RunMatrix(Phi_present);
+        runs_pending = false;
+    };
     IndexVector dofs_next = h.fine_dofs;
     for (int k = q - 1; k >= 1; --k) {
         const auto t0 = std::chrono::steady_clock::now();
@@ -608,9 +612,8 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 // after the step (80x20x20 accordion, 3 levels: peak 13.7 -> 11.0 GB).
                 if (runs_pending && !phi_read_after &&
                     detail::regions_span_level(parts, rings, g)) {
-                    h.levels[static_cast<std::size_t>(q - 2)].C_adapted = RunMatrix(Phi_present);
+                    store_pending_runs();
                     Phi_present = SparseMatrix();
-                    runs_pending = false;
                 }
                 Ct = detail::relaxed_adapted_refinement(A, L.C, composed, Phi_present, parts, g,
                                                         rings, options.relaxation);
@@ -751,10 +754,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         }
         SparseMatrix Phi_next;
         if (phi_read_after) Phi_next = product(Ct, Phi_present);
-        if (runs_pending) {
-            h.levels[static_cast<std::size_t>(q - 2)].C_adapted = RunMatrix(Phi_present);
-            runs_pending = false;
-        }
+        if (runs_pending) store_pending_runs();
         if (next_by_cell && k == q - 1) {
             // Φ^{q-1} = C̃^{q-1}: kept as it is while the next step reads it, and stored as runs
             // after (both at once held another copy of C̃ at the next step's peak: 80x20x20

@@ -990,6 +990,13 @@ double soft_diagonal(const SparseMatrix& A, const StepGeometry& g) {
     return d;
 }
 
+/// The relaxed step's operator M = A + penalty G^T G (compressed).
+SparseMatrix penalized(const SparseMatrix& A, const SparseMatrix& G, double penalty) {
+    SparseMatrix M = A + penalty * product(SparseMatrix(G.transpose()), G);
+    M.makeCompressed();
+    return M;
+}
+
 }  // namespace
 
 SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
@@ -1041,9 +1048,7 @@ SparseMatrix spanning_relaxed_refinement(const SparseMatrix& A, const SparseMatr
                   penalty, G.rows());
         solve::gemm(Y, false, S_factor.solve(Matrix(product(G, Ct))), false, 0.0, x);
     } else {
-        SparseMatrix M = A + penalty * product(SparseMatrix(G.transpose()), G);
-        M.makeCompressed();
-        solver.compute(M);
+        solver.compute(penalized(A, G, penalty));
         x = Matrix(Ct) - solver.solve(Matrix(A * Ct));
     }
     SparseMatrix out = x.transpose().sparseView(0.0, 0.0);
@@ -1090,10 +1095,8 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     // the sum over the parts' fine elements costs more than the step).
     if (regions_span_level(parts, rings, g)) return spanning_relaxed_refinement(A, C, G, penalty);
     CG_ASSERT(Phi.rows() == A.rows(), "mra: relaxed step without its fine functions");
-    SparseMatrix M = A + penalty * product(SparseMatrix(G.transpose()), G);
-    M.makeCompressed();
-    return cell_corrections(M, static_cast<Index>(A.rows()), interior, Phi, product(C, Phi), C,
-                            parts, g, rings);
+    return cell_corrections(penalized(A, G, penalty), static_cast<Index>(A.rows()), interior, Phi,
+                            product(C, Phi), C, parts, g, rings);
 }
 
 SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,
