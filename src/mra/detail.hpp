@@ -153,19 +153,19 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
 /// supported in the box of `rings` rings around T (the DOFs of its nodes but those on a face of the
 /// box inside the grid), i.e. M[S_T, S_T] w = -(Φ A_T (C Φ)^T)[S_T, :] with M = A + (d / gamma)
 /// G^T G, and X = sum_T w^T: the relaxed constraint energy minimization of Chung, Efendiev and
-/// Leung (2018). With boxes spanning the grid, C̃^T = C^T - M^{-1} A C^T = (d / gamma) M^{-1} G^T
-/// G C^T spans M^{-1} G^T = A^{-1} G^T (I + (d / gamma) G A^{-1} G^T)^{-1} (Woodbury): for every
-/// gamma the space the global solves give with the measurements G, i.e. with global solves at
-/// every step the global hierarchy's level k (the composed measurements are those of the global
-/// construction, whose coefficients are measurements). Measuring C w instead, at a coarser step
-/// after relaxed ones (whose coefficients are not measurements), lost 3-level hierarchies up to
-/// 7.6x (docs/mra-localization.md). Localized, the reaction term makes the correctors decay
-/// faster. A rigid motion r with nodal values r_c at level k (C^T r_c = r for the linear
-/// refinement) gives sum_i (r_c)_i w_i = 0 in each part (A_T r = 0 where T touches no Dirichlet
-/// DOF), so C̃^T r_c = r without the invariance correction. A: A^{k+1}, both triangles; Phi:
-/// Φ^{k+1} on the present fine DOFs (rows: level-(k+1) DOFs). Where every region spans the level
-/// the parts' right-hand sides sum to A C^T (sum_T A_T = A^q), and C̃ = C - (M^{-1} A C^T)^T is
-/// one solve (spanning_relaxed_refinement), which does not read Phi (it may be empty).
+/// Leung (2018). Measuring C w instead, at a coarser step after relaxed ones (whose coefficients
+/// are not measurements), lost 3-level hierarchies up to 7.6x (docs/mra-localization.md).
+/// Localized, the reaction term makes the correctors decay faster. A rigid motion r with nodal
+/// values r_c at level k (C^T r_c = r for the linear refinement) gives sum_i (r_c)_i w_i = 0 in
+/// each part (A_T r = 0 where T touches no Dirichlet DOF), so C̃^T r_c = r without the invariance
+/// correction. With boxes spanning the grid, C^T - M^{-1} A C^T = (d / gamma) M^{-1} G^T G C^T
+/// spans M^{-1} G^T = A^{-1} G^T (I + (d / gamma) G A^{-1} G^T)^{-1} (Woodbury): for every gamma
+/// the space the global solves give with the measurements G (with global solves at every step,
+/// the global hierarchy's level k: the composed measurements are those of the global
+/// construction, whose coefficients are measurements). Such a step is whole_level_refinement,
+/// in the measurements' basis (its coefficients are G's, not nodal values), and does not read
+/// Phi (it may be empty). A: A^{k+1}, both triangles; Phi: Φ^{k+1} on the present fine DOFs
+/// (rows: level-(k+1) DOFs).
 /// @throws Error if G and C differ in shape, or level k+1 has no interior node with all its DOFs
 /// (no scale d)
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
@@ -177,18 +177,22 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
 /// at most rings / kRegionSnap short) is the whole level k+1.
 bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, const StepGeometry& g);
 
-/// C̃ = C - (M^{-1} A C^T)^T with M = A + penalty G^T G: the relaxed step whose every region spans
-/// the level (relaxed_adapted_refinement). M^{-1} A C^T = C^T - penalty M^{-1} G^T G C^T, and by
-/// Woodbury penalty M^{-1} G^T = Y S^{-1} with Y = A^{-1} G^T and S = I / penalty + G Y, so
-/// C̃^T = Y S^{-1} G C^T: A's factorization and #rows(G) solves instead of M's, and G^T G, which
-/// is dense, never formed (the 80x20x20 accordion's coarse step, 14,883 unknowns and 2,268
-/// measurements: G^T G took 27.8 s, M 7.5 s and M's dense factorization 15.5 s). Where A is
-/// singular (no Dirichlet conditions hold the model: SpdSolver reports NotPositiveDefinite),
-/// through M's factorization. A: both triangles, n x n; C, G: m x n; penalty > 0.
-/// @throws Error on mismatched shapes or a penalty <= 0; NotPositiveDefinite if M is not
-/// definite
-SparseMatrix spanning_relaxed_refinement(const SparseMatrix& A, const SparseMatrix& C,
-                                         const SparseMatrix& G, double penalty);
+/// C̃ = (G Y)^{-1} Y^T with Y = A^{-1} G^T: the step on the whole level k+1 with the measurements
+/// G, the functions of least energy A with G C̃^T = I (the global construction's C̃ where G = C).
+/// The relaxed step whose every region spans the level gives the same space for every penalty,
+/// C^T - M^{-1} A C^T = Y S^{-1} G C^T with M = A + penalty G^T G and S = I / penalty + G Y
+/// (Woodbury), but in the basis of coefficients G C^T, which the composed measurements after a
+/// localized relaxed step can leave near singular (40x40x8 hung checker, 3 levels, 6 fine
+/// rings: sigma_min / sigma_max of G C^T 4e-7, and A^k numerically singular); here A^k =
+/// (G Y)^{-1}, definite whenever G has full rank. A's sparse factorization and #rows(G) solves;
+/// G^T G, which is dense, is never formed (the 80x20x20 accordion's coarse step, 14,883 unknowns
+/// and 2,268 measurements: G^T G took 27.8 s, M 7.5 s and M's dense factorization 15.5 s).
+/// Where A is singular (no Dirichlet conditions hold the model: SpdSolver reports
+/// NotPositiveDefinite), Y = M^{-1} G^T: the penalty is constant where G w is fixed, so the
+/// constrained minimizer is the same. A: both triangles, n x n; G: m x n; penalty > 0.
+/// @throws Error on mismatched shapes, a penalty <= 0, or G A^{-1} G^T not definite (dependent
+/// measurements); NotPositiveDefinite if M is not definite
+SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G, double penalty);
 
 /// A sparse left inverse X^T of C^T (C X = I, the role of C^† in Eq. 11) that reproduces rigid
 /// motions, X C r = r for the modes rig_fine (Rig^{k+1}), which cell localization needs: then

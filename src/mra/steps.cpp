@@ -1021,37 +1021,25 @@ bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, cons
     });
 }
 
-SparseMatrix spanning_relaxed_refinement(const SparseMatrix& A, const SparseMatrix& C,
-                                         const SparseMatrix& G, double penalty) {
-    CG_VERIFY(A.rows() == A.cols() && C.cols() == A.rows() && G.rows() == C.rows() &&
-                  G.cols() == C.cols() && penalty > 0,
-              "mra: spanning relaxed step with a {}x{} operator, {}x{} refinement, {}x{} "
-              "measurements and penalty {}",
-              A.rows(), A.cols(), C.rows(), C.cols(), G.rows(), G.cols(), penalty);
-    const SparseMatrix Ct = C.transpose();
+SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G, double penalty) {
+    CG_VERIFY(A.rows() == A.cols() && G.cols() == A.rows() && penalty > 0,
+              "mra: step on the whole level with a {}x{} operator, {}x{} measurements and "
+              "penalty {}",
+              A.rows(), A.cols(), G.rows(), G.cols(), penalty);
+    const Matrix Gt(G.transpose());
     solve::SpdSolver solver;
-    bool definite = true;
     try {
         solver.compute(A);
     } catch (const NotPositiveDefinite&) {
-        definite = false;
-    }
-    Matrix x(C.cols(), C.rows());  // C̃^T
-    if (definite) {
-        const Matrix Y = solver.solve(Matrix(G.transpose()));  // A^{-1} G^T
-        Matrix S = sparse_times_dense(G, Y);
-        S.diagonal().array() += 1.0 / penalty;
-        solve::DenseCholesky S_factor;
-        CG_VERIFY(S_factor.compute(std::move(S)) == 0,
-                  "mra: spanning relaxed step: I / {} + G A^-1 G^T ({} measurements) lost its "
-                  "definiteness to round-off",
-                  penalty, G.rows());
-        solve::gemm(Y, false, S_factor.solve(Matrix(product(G, Ct))), false, 0.0, x);
-    } else {
         solver.compute(penalized(A, G, penalty));
-        x = Matrix(Ct) - solver.solve(Matrix(A * Ct));
     }
-    SparseMatrix out = x.transpose().sparseView(0.0, 0.0);
+    const Matrix Y = solver.solve(Gt);  // A^{-1} G^T, or M^{-1} G^T
+    solve::DenseCholesky GY;
+    CG_VERIFY(GY.compute(sparse_times_dense(G, Y)) == 0,
+              "mra: step on the whole level: G A^-1 G^T ({} measurements) is not definite: the "
+              "measurements are dependent",
+              G.rows());
+    SparseMatrix out = GY.solve(Matrix(Y.transpose())).sparseView(0.0, 0.0);
     out.makeCompressed();
     return out;
 }
@@ -1093,7 +1081,7 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     // Every region spanning the level: the parts' right-hand sides sum to Φ A^q (C Φ)^T = A C^T
     // (sum_T A_T = A^q, A = Φ A^q Φ^T), solved at once, without forming C Φ (on a coarse level
     // the sum over the parts' fine elements costs more than the step).
-    if (regions_span_level(parts, rings, g)) return spanning_relaxed_refinement(A, C, G, penalty);
+    if (regions_span_level(parts, rings, g)) return whole_level_refinement(A, G, penalty);
     CG_ASSERT(Phi.rows() == A.rows(), "mra: relaxed step without its fine functions");
     return cell_corrections(penalized(A, G, penalty), static_cast<Index>(A.rows()), interior, Phi,
                             product(C, Phi), C, parts, g, rings);

@@ -5,7 +5,9 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
+#include <vector>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/mra/multilevel_solver.hpp"
@@ -13,6 +15,8 @@
 
 namespace coarsegrain::mra {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 Options cell_options(int levels, Refinement r, double radius) {
     Options o = test::exact_options(levels, r);
@@ -82,8 +86,84 @@ TEST_P(MraCellLocalized, RelaxedWithRegionsCoveringTheGridGivesTheGlobalSpace) {
                 EXPECT_LT(test::energy_norm(p.K, u - u_global),
                           1e-8 * test::energy_norm(p.K, u_global))
                     << levels << " levels, gamma " << gamma << " patch " << patch;
+                // An infinite radius is the same step on the whole level, at any step: the
+                // same computation, so equal up to the summation order of threaded reductions
+                // (1e-13 relative).
+                const std::vector<std::vector<double>> infinite =
+                    levels == 2 ? std::vector<std::vector<double>>{{kInf}}
+                                : std::vector<std::vector<double>>{
+                                      {kInf, 8}, {8, kInf}, {kInf, kInf}};
+                for (const std::vector<double>& radius : infinite) {
+                    relaxed.radius = radius;
+                    EXPECT_LT(test::energy_norm(p.K, solution(relaxed) - u),
+                              1e-13 * test::energy_norm(p.K, u))
+                        << levels << " levels, gamma " << gamma << " patch " << patch
+                        << ", radius " << radius.front() << ", " << radius.back();
+                }
             }
     }
+}
+
+TEST(MraAutomaticConstruction, LocalizedOnlyOnLargeThreeDGridsWithDefaultLocalization) {
+    Options o;  // radius empty: automatic
+    const Index big = kLocalizedMinDofs + 1;
+    const Options localized = automatic_construction(o, 3, big, true);
+    EXPECT_EQ(localized.localization, Localization::Cell);
+    EXPECT_EQ(localized.patch, kLocalizedPatch);
+    EXPECT_EQ(localized.relaxation, kLocalizedRelaxation);
+    // The coarser steps on their whole level, the finest at kLocalizedFineRings.
+    EXPECT_EQ(localized.radius, (std::vector<double>{kInf, kLocalizedFineRings}));
+    EXPECT_NO_THROW(validate(localized));
+    o.levels = 2;
+    EXPECT_EQ(automatic_construction(o, 3, big, true).radius,
+              std::vector<double>{kLocalizedFineRings});
+    o.levels = 3;
+    const auto global = [&](const Options& given, int dim, Index dofs, bool parts) {
+        const Options r = automatic_construction(given, dim, dofs, parts);
+        return r.radius == std::vector<double>{kInf} && r.localization == given.localization &&
+               r.patch == given.patch && r.relaxation == given.relaxation;
+    };
+    EXPECT_TRUE(global(o, 3, kLocalizedMinDofs, true));  // not above the threshold
+    EXPECT_TRUE(global(o, 2, 10 * big, true));
+    EXPECT_TRUE(global(o, 3, big, false));  // no element materials, or level meshes
+    const std::vector<std::function<void(Options&)>> excluded = {
+        [](Options& x) { x.refinement = Refinement::Dirac; },
+        [](Options& x) { x.dirichlet = DirichletTreatment::Penalty; },
+        [](Options& x) { x.dirichlet = DirichletTreatment::DiagonalPenalty; },
+        [](Options& x) { x.fine_operator = Operator::Step; },
+        [](Options& x) { x.measurement = Measurement::Stiffness; },
+        [](Options& x) { x.localization = Localization::Cell; },
+        [](Options& x) { x.patch = 3; },
+        [](Options& x) { x.patch_clip = true; },
+        [](Options& x) { x.defect_tolerance = 1e-2; },
+        [](Options& x) {
+            x.localization = Localization::Cell;
+            x.relaxation = 1;
+        },
+    };
+    for (std::size_t i = 0; i < excluded.size(); ++i) {
+        Options x = o;
+        excluded[i](x);
+        EXPECT_TRUE(global(x, 3, big, true)) << "case " << i;
+    }
+    for (const DirichletTreatment t : {DirichletTreatment::Eliminate, DirichletTreatment::Ignore}) {
+        Options x = o;
+        x.dirichlet = t;
+        EXPECT_EQ(automatic_construction(x, 3, big, true).localization, Localization::Cell);
+    }
+    // A given radius is kept as it is.
+    o.radius = {5};
+    EXPECT_EQ(automatic_construction(o, 3, big, true).radius, std::vector<double>{5});
+    EXPECT_EQ(automatic_construction(o, 3, big, true).localization, Localization::Node);
+}
+
+TEST(MraAutomaticConstruction, BuildRecordsWhatItResolvedTo) {
+    // A small model: global solves, recorded in Hierarchy::options.
+    const test::GridProblem p =
+        test::hung_problem(3, Eigen::Vector3i(4, 4, 4), 1.0, 1e3, test::checker_pattern);
+    const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, Options(), &p.materials);
+    EXPECT_EQ(h.options.radius, std::vector<double>{kInf});
+    EXPECT_EQ(h.options.localization, Localization::Node);
 }
 
 TEST_P(MraCellLocalized, NeedsMaterialsUnclippedPatchesAndNoPenalty) {

@@ -140,7 +140,7 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
     const Options d = scene::parse_coarse_options(json(), "t").mra;
     EXPECT_EQ(d.levels, 3);
     EXPECT_EQ(d.refinement, Refinement::Linear);
-    EXPECT_TRUE(std::isinf(d.radius.at(0)));
+    EXPECT_TRUE(d.radius.empty());  // automatic_construction
     EXPECT_EQ(d.radius_grid, RadiusGrid::Fine);
     EXPECT_EQ(d.localization, Localization::Node);
     EXPECT_EQ(d.measurement, Measurement::Canonical);
@@ -183,6 +183,15 @@ TEST(MraCoarseModel, OptionsDefaultsAndValues) {
             json::parse(R"({"radius": 4, "localization": "cell", "relaxation": 3})"), "t")
             .mra;
     EXPECT_EQ(relaxed.relaxation, 3.0);
+    // With relaxation an infinite radius is the relaxed step on the whole level.
+    const Options spanning =
+        scene::parse_coarse_options(
+            json::parse(
+                R"({"levels": 3, "radius": ["inf", 4], "localization": "cell", "relaxation": 3})"),
+            "t")
+            .mra;
+    EXPECT_TRUE(std::isinf(spanning.radius.at(0)));
+    EXPECT_EQ(spanning.relaxation, 3.0);
 }
 
 TEST(MraCoarseModel, BadOptionsNameTheirKey) {
@@ -211,12 +220,11 @@ TEST(MraCoarseModel, BadOptionsNameTheirKey) {
         {R"({"max_radius": 0.5})", "coarse.max_radius: expected a number >= 1, got 0.5"},
         {R"({"relaxation": -1})",
          "coarse.relaxation: expected a number >= 0 (0: exact measurements), got -1"},
-        {R"({"radius": 4, "relaxation": 3})",
-         "coarse: mra: relaxation needs cell localization with a finite radius"},
-        {R"({"localization": "cell", "relaxation": 3})",
-         "coarse: mra: relaxation needs cell localization with a finite radius"},
-        {R"({"levels": 3, "radius": ["inf", 4], "localization": "cell", "relaxation": 3})",
-         "coarse: mra: relaxation needs cell localization with a finite radius at every step"},
+        {R"({"radius": 4, "relaxation": 3})", "coarse: mra: relaxation needs cell localization"},
+        {R"({"relaxation": 3})", "coarse: mra: relaxation needs cell localization"},
+        {R"({"levels": 3, "radius": ["inf", 4], "localization": "cell", "relaxation": 3,
+             "refinement": "dirac"})",
+         "coarse: mra: relaxation with a finite radius needs the linear refinement"},
         {R"({"truncation": 1})", "coarse.truncation: expected a number in [0, 1)"},
         {R"({"invariance": "yes"})", "coarse.invariance: expected true or false"},
         {R"({"dirichlet": "clamp"})", "coarse.dirichlet: unknown value \"clamp\""},

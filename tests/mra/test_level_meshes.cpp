@@ -458,7 +458,7 @@ TEST(LevelMeshHierarchy, BadInputIsAnError) {
     o.patch = 1;
     o.localization = Localization::Cell;
     test::expect_error([&] { build_hierarchy(levels, p.mesh, p.K, p.bc.dofs, o); },
-                       "cell localization needs grids");
+                       "cell-wise and relaxed solves need grids");
     o.localization = Localization::Node;
     o.radius = {std::numeric_limits<double>::infinity()};
     std::vector<mesh::Mesh> quads = levels;

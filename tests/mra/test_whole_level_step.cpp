@@ -1,9 +1,10 @@
-// The relaxed step whose regions span the level (detail::spanning_relaxed_refinement, private to
-// the library): by Woodbury on A's factorization where A is definite, by M's where it is singular,
-// against the defining formula C̃ = C - ((A + p G^T G)^{-1} A C^T)^T solved densely.
+// The step on the whole level with the measurements G (detail::whole_level_refinement, private to
+// the library): on A's factorization where A is definite, on M's where it is singular, against the
+// constrained minimization solved densely, and against the relaxed step's space.
 #include <gtest/gtest.h>
 
 #include <random>
+#include <string>
 
 #include "../../src/mra/detail.hpp"
 #include "../../src/mra/products.hpp"
@@ -57,41 +58,63 @@ SparseMatrix perturbed(const SparseMatrix& C, double density, double spread, uns
     return G.sparseView();
 }
 
-/// C - ((A + p G^T G)^{-1} A C^T)^T by a dense Cholesky.
-Matrix defining_formula(const SparseMatrix& A, const SparseMatrix& C, const SparseMatrix& G,
-                        double p) {
+/// The relaxed step on the whole level, C - ((A + p G^T G)^{-1} A C^T)^T, by a dense Cholesky.
+Matrix relaxed_formula(const SparseMatrix& A, const SparseMatrix& C, const SparseMatrix& G,
+                       double p) {
     const Matrix Gd(G), Cd(C);
     const Matrix M = Matrix(A) + p * Gd.transpose() * Gd;
     return Cd - Matrix(M.llt().solve(Matrix(A) * Cd.transpose())).transpose();
 }
 
-// 13 coarse and 61 fine nodes, contrast 100: held, cond(A) = 1.6e5, so Woodbury's solves with A
-// are accurate to about cond(A) eps = 2e-11; cond(M) is below 1e3. 1e-10 relative (measured
-// 3e-15 to 4e-14).
-// Measurements sparse (C's pattern: the column-by-column product of sparse_times_dense) and 40%
-// dense (its dense copy); penalties 0.1 and 100 around the stiffnesses. Free, A's null space
-// (the constants) makes it singular and the step goes through M.
-TEST(MraSpanningRelaxedStep, IsTheDefiningFormulaWithAndWithoutDirichletConditions) {
+/// argmin tr(X A X^T) subject to G X^T = I, by the dense KKT system [A G^T; G 0].
+Matrix constrained_minimizer(const SparseMatrix& A, const SparseMatrix& G) {
+    const Index n = A.rows(), m = G.rows();
+    Matrix kkt = Matrix::Zero(n + m, n + m);
+    kkt.topLeftCorner(n, n) = Matrix(A);
+    kkt.topRightCorner(n, m) = Matrix(G.transpose());
+    kkt.bottomLeftCorner(m, n) = Matrix(G);
+    Matrix rhs = Matrix::Zero(n + m, m);
+    rhs.bottomRows(m).setIdentity();
+    return Matrix(kkt.fullPivLu().solve(rhs)).topRows(n).transpose();
+}
+
+// 13 coarse and 61 fine nodes, contrast 100: held, cond(A) = 1.6e5, so the solves with A are
+// accurate to about cond(A) eps = 2e-11; the KKT system's LU to about its condition times eps.
+// 1e-10 relative. Measurements sparse (C's pattern: the column-by-column product of
+// sparse_times_dense) and 40% dense (its dense copy). Free, A's null space (the constants) makes
+// it singular and the step goes through M (penalties 0.1 and 100 around the stiffnesses).
+TEST(MraWholeLevelStep, IsTheConstrainedMinimizerWithAndWithoutDirichletConditions) {
     const SparseMatrix C = interpolation(13, 5);
     for (const bool held : {true, false})
         for (const double density : {0.0, 0.4})
             for (const double p : {0.1, 100.0}) {
                 const SparseMatrix A = chain(C.cols(), 100.0, held);
                 const SparseMatrix G = perturbed(C, density, 0.2, 7);
-                const SparseMatrix Ct = spanning_relaxed_refinement(A, C, G, p);
-                const Matrix expected = defining_formula(A, C, G, p);
-                ASSERT_EQ(Ct.rows(), C.rows());
-                ASSERT_EQ(Ct.cols(), C.cols());
-                EXPECT_LT((Matrix(Ct) - expected).norm(), 1e-10 * expected.norm())
-                    << (held ? "held" : "free") << ", density " << density << ", penalty " << p;
+                const Matrix Ct(whole_level_refinement(A, G, p));
+                const Matrix expected = constrained_minimizer(A, G);
+                ASSERT_EQ(Ct.rows(), G.rows());
+                ASSERT_EQ(Ct.cols(), G.cols());
+                const std::string label = std::string(held ? "held" : "free") + ", density " +
+                                          std::to_string(density) + ", penalty " +
+                                          std::to_string(p);
+                EXPECT_LT((Ct - expected).norm(), 1e-10 * expected.norm()) << label;
+                // The relaxed step's basis D spans the same space, in which every function v is
+                // C̃^T G v: D^T = C̃^T G D^T (M's condition is below 1e3 here).
+                const Matrix D = relaxed_formula(A, C, G, p);
+                EXPECT_LT((Ct.transpose() * (Matrix(G) * D.transpose()) - D.transpose()).norm(),
+                          1e-10 * D.norm())
+                    << label;
             }
 }
 
-TEST(MraSpanningRelaxedStep, RefusesMismatchedShapesAndNoPenalty) {
+TEST(MraWholeLevelStep, RefusesMismatchedShapesNoPenaltyAndDependentMeasurements) {
     const SparseMatrix C = interpolation(4, 2), A = chain(C.cols(), 10.0, true);
-    EXPECT_THROW(spanning_relaxed_refinement(A, C, interpolation(5, 2), 1.0), Error);
-    EXPECT_THROW(spanning_relaxed_refinement(chain(5, 10.0, true), C, C, 1.0), Error);
-    EXPECT_THROW(spanning_relaxed_refinement(A, C, C, 0.0), Error);
+    EXPECT_THROW(whole_level_refinement(chain(5, 10.0, true), C, 1.0), Error);
+    EXPECT_THROW(whole_level_refinement(A, C, 0.0), Error);
+    Matrix twice(Matrix(C).rows() + 1, C.cols());
+    twice.topRows(C.rows()) = Matrix(C);
+    twice.row(C.rows()) = Matrix(C).row(0);
+    EXPECT_THROW(whole_level_refinement(A, SparseMatrix(twice.sparseView()), 1.0), Error);
 }
 
 // Both kernels of sparse_times_dense: the dense copy (X 60% dense) and X's columns (1%), against
