@@ -90,17 +90,41 @@ TEST_P(MraCellLocalized, RelaxedWithRegionsCoveringTheGridGivesTheGlobalSpace) {
                 // same computation, so equal up to the summation order of threaded reductions
                 // (1e-13 relative).
                 const std::vector<std::vector<double>> infinite =
-                    levels == 2 ? std::vector<std::vector<double>>{{kInf}}
-                                : std::vector<std::vector<double>>{
-                                      {kInf, 8}, {8, kInf}, {kInf, kInf}};
+                    levels == 2
+                        ? std::vector<std::vector<double>>{{kInf}}
+                        : std::vector<std::vector<double>>{{kInf, 8}, {8, kInf}, {kInf, kInf}};
                 for (const std::vector<double>& radius : infinite) {
                     relaxed.radius = radius;
                     EXPECT_LT(test::energy_norm(p.K, solution(relaxed) - u),
                               1e-13 * test::energy_norm(p.K, u))
-                        << levels << " levels, gamma " << gamma << " patch " << patch
-                        << ", radius " << radius.front() << ", " << radius.back();
+                        << levels << " levels, gamma " << gamma << " patch " << patch << ", radius "
+                        << radius.front() << ", " << radius.back();
                 }
             }
+    }
+}
+
+TEST_P(MraCellLocalized, RelaxedOnEveryWholeLevelIsTheGlobalHierarchy) {
+    // An infinite radius with relaxation takes each step on the whole level in the basis of its
+    // measurements G, C̃^T = A^{-1} G^T (G A^{-1} G^T)^{-1}: at the finest step G = C, which is
+    // the global construction's C̃ (C C̃^T = I, least energy); then G = C^k C^{k+1} Φ^{k+1,T} =
+    // C^k, since C^{k+1} C̃^{k+1,T} = I. So every level equals the global hierarchy's, computed
+    // another way (one factorization of A^{k+1} instead of B^k's wavelet solves): 1e-10 relative,
+    // as RadiusCoveringTheGridEqualsGlobalSolves.
+    const int dim = GetParam();
+    const Eigen::Vector3i cells = dim == 2 ? Eigen::Vector3i(8, 8, 1) : Eigen::Vector3i(4, 4, 4);
+    const test::GridProblem p = test::hung_problem(dim, cells, 1.0, 1e3, test::checker_pattern);
+    for (const int levels : {2, 3}) {
+        const Hierarchy hg = build_hierarchy(p.mesh, p.K, p.bc.dofs,
+                                             test::exact_options(levels, Refinement::Linear));
+        Options relaxed = cell_options(levels, Refinement::Linear, kInf);
+        relaxed.relaxation = 3;
+        const Hierarchy hr = build_hierarchy(p.mesh, p.K, p.bc.dofs, relaxed, &p.materials);
+        for (int k = 1; k < levels; ++k) {
+            const SparseMatrix& Cg = hg.level(k).C_adapted.sparse();
+            EXPECT_LT(Matrix(Cg - hr.level(k).C_adapted.sparse()).norm(), 1e-10 * Matrix(Cg).norm())
+                << levels << " levels, level " << k;
+        }
     }
 }
 
