@@ -8,9 +8,9 @@ import scipy.sparse.linalg
 import coarsegrain as cg
 from conftest import example_scene
 
-# The exact construction: global solves (what no radius gives on these small models), no truncation, no invariance
-# correction; the wavelets are then A-orthogonal to the basis (Eq. 12) and the multilevel solve
-# is the fine solve.
+# The exact construction: global solves (what no radius gives on these small models), no
+# truncation, no invariance correction; the wavelets are then A-orthogonal to the basis (Eq. 12)
+# and the multilevel solve is the fine solve.
 EXACT = {"truncation": 0, "invariance": False}
 
 
