@@ -15,20 +15,21 @@
 /// a level's DOFs at fixed finest DOFs are held at zero only when it is solved (fixed_positions,
 /// free_operator).
 ///
-/// Global solves for Z (Options::radius infinite, the default) followed by truncation at 1e-7 are
-/// the accurate construction. Localized solves (node- or cell-wise, patches, clipping, a
-/// defect-driven radius) build faster in 3D but are much less accurate on smooth, large
-/// deformations: each basis function's small deviation from the global one adds up over the
-/// coarse coefficients. Cell-wise localization with relaxed measurements (Options::relaxation)
-/// comes within 1.0-1.3x of the global error on isolated stiff inclusions and checkers (blocks
-/// of 2^3 cells, 6 rings at 16^3 hexes, 8 at 32^3, C̃ 41% and 15% dense against 99%; with three
-/// levels too), but the radius must grow with the grid. On the layered accordion (three levels,
-/// the coarse step's regions spanning its level, the fine step's half a length unit each way and
-/// across the section) it beats the global error in less time (64x16x16: 0.23x in 0.44x, C̃ 0.6x
-/// as dense); with 5 fine rings it is 0.78x at 64x16x16 and 1.48x at 80x20x20 with C̃ 0.28-0.30x
-/// as dense, in a quarter of the build and half the memory or less (48x12x12 needs 6 rings).
-/// docs/mra-localization.md has the measurements behind each option (accuracy, build time,
-/// storage) and the commands that regenerate them.
+/// Global solves for Z (Options::radius infinite; what the automatic construction gives in 2D
+/// and up to 40K DOFs) followed by truncation at 1e-7 are the accurate construction. Localized
+/// solves (node- or cell-wise, patches, clipping, a defect-driven radius) build faster in 3D but
+/// are much less accurate on smooth, large deformations: each basis function's small deviation from
+/// the global one adds up over the coarse coefficients. Cell-wise localization with relaxed
+/// measurements (Options::relaxation) comes within 1.0-1.3x of the global error on isolated stiff
+/// inclusions and checkers (blocks of 2^3 cells, 6 rings at 16^3 hexes, 8 at 32^3, C̃ 41% and 15%
+/// dense against 99%; with three levels too), but the radius must grow with the grid. On the
+/// layered accordion (three levels, the coarse step's regions spanning its level, the fine step's
+/// half a length unit each way and across the section) it beats the global error in less time
+/// (64x16x16: 0.23x in 0.44x, C̃ 0.6x as dense); with 5 fine rings it is 0.78x at 64x16x16 and 1.48x
+/// at 80x20x20 with C̃ 0.28-0.30x as dense, in a quarter of the build and half the memory or less
+/// (48x12x12 needs 6 rings). That setting with 6 fine rings is the automatic construction above 40K
+/// DOFs in 3D (automatic_construction). docs/mra-localization.md has the measurements behind each
+/// option (accuracy, build time, storage) and the commands that regenerate them.
 #include <limits>
 #include <string>
 #include <vector>

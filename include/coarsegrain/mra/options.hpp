@@ -110,9 +110,9 @@ struct Options {
     /// factorization of B^k for all columns of Z). With Localization::Cell a region within
     /// rho / 3 rings of the grid's boundary is extended to it. With relaxation, infinity (or a
     /// radius that spans the level: rho at least the finer level's cells per axis) is the
-    /// relaxed step on the whole level, exact: one factorization for all its parts (of A^{k+1},
-    /// by Woodbury, where Dirichlet conditions hold the model), measuring the fine functions of
-    /// the relaxed steps below.
+    /// relaxed step on the whole level, exact: one factorization of A^{k+1} for all its parts,
+    /// in the basis of its measurements G (C̃^T = A^{-1} G^T (G A^{-1} G^T)^{-1}, G measuring
+    /// the fine functions of the relaxed steps below).
     std::vector<double> radius;
     RadiusGrid radius_grid = RadiusGrid::Fine;
     /// Eq. 12 defect-driven radius (node localization, finite radii; 0: off). The localized
