@@ -207,8 +207,15 @@ bool cell_wise(const Options& options) {
 
 }  // namespace
 
-Options automatic_construction(Options options, int dim, Index fine_dofs, bool cell_parts) {
+Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
+                               bool cell_parts) {
     if (!options.radius.empty()) return options;
+    // DOFs of the level whose cells per axis are the fine grid's halved `halvings` times.
+    const auto level_dofs = [&](int halvings) {
+        Index nodes = 1;
+        for (int d = 0; d < dim; ++d) nodes *= (cells[d] >> halvings) + 1;
+        return dim * nodes;
+    };
     const Options defaults;
     const bool localization_given =
         options.localization != defaults.localization || options.patch != defaults.patch ||
@@ -217,7 +224,7 @@ Options automatic_construction(Options options, int dim, Index fine_dofs, bool c
     const bool element_parts = options.dirichlet == DirichletTreatment::Eliminate ||
                                options.dirichlet == DirichletTreatment::Constrain ||
                                options.dirichlet == DirichletTreatment::Ignore;
-    const bool localized = dim == 3 && cell_parts && fine_dofs > kLocalizedMinDofs &&
+    const bool localized = dim == 3 && cell_parts && level_dofs(0) > kLocalizedMinDofs &&
                            !localization_given && element_parts &&
                            options.refinement == Refinement::Linear &&
                            options.measurement == Measurement::Canonical &&
@@ -230,8 +237,13 @@ Options automatic_construction(Options options, int dim, Index fine_dofs, bool c
     options.localization = Localization::Cell;
     options.patch = kLocalizedPatch;
     options.relaxation = kLocalizedRelaxation;
-    options.radius.assign(static_cast<std::size_t>(options.levels - 1), global);
-    options.radius.back() = kLocalizedFineRings;
+    // Step k (radius[k - 1]) builds level k from level k + 1, the fine grid halved q - 1 - k
+    // times; the finest step is always localized.
+    const int q = options.levels;
+    options.radius.resize(static_cast<std::size_t>(q - 1));
+    for (int k = 1; k < q; ++k)
+        options.radius[static_cast<std::size_t>(k - 1)] =
+            k < q - 1 && level_dofs(q - 1 - k) <= kWholeLevelMaxDofs ? global : kLocalizedFineRings;
     return options;
 }
 
@@ -388,8 +400,9 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
               "mra: the fine mesh must be a regular grid (mesh.grid), the material-adapted "
               "hierarchy is built on nested grids or given level meshes");
     const int dim = mesh.dim();
-    const Options options = automatic_construction(chosen, dim, dim * mesh.num_nodes(),
-                                                   on_grid && materials != nullptr);
+    const Options options =
+        automatic_construction(chosen, on_grid ? mesh.grid->cells : Eigen::Vector3i::Zero(), dim,
+                               on_grid && materials != nullptr);
     const int q = options.levels;
     validate(options);
     const Eigen::Vector3i cells = on_grid ? mesh.grid->cells : Eigen::Vector3i::Zero();

@@ -130,26 +130,38 @@ TEST_P(MraCellLocalized, RelaxedOnEveryWholeLevelIsTheGlobalHierarchy) {
 
 TEST(MraAutomaticConstruction, LocalizedOnlyOnLargeThreeDGridsWithDefaultLocalization) {
     Options o;  // radius empty: automatic
-    const Index big = kLocalizedMinDofs + 1;
-    const Options localized = automatic_construction(o, 3, big, true);
+    // 48x16x16 hexes: 42,483 DOFs, above kLocalizedMinDofs; 44x16x16: 39,015, below.
+    const Eigen::Vector3i big(48, 16, 16), small(44, 16, 16);
+    const Options localized = automatic_construction(o, big, 3, true);
     EXPECT_EQ(localized.localization, Localization::Cell);
     EXPECT_EQ(localized.patch, kLocalizedPatch);
     EXPECT_EQ(localized.relaxation, kLocalizedRelaxation);
-    // The coarser steps on their whole level, the finest at kLocalizedFineRings.
+    // The coarser step on its whole level (24x8x8 hexes: 6,075 DOFs), the finest at
+    // kLocalizedFineRings.
     EXPECT_EQ(localized.radius, (std::vector<double>{kInf, kLocalizedFineRings}));
     EXPECT_NO_THROW(validate(localized));
     o.levels = 2;
-    EXPECT_EQ(automatic_construction(o, 3, big, true).radius,
+    EXPECT_EQ(automatic_construction(o, big, 3, true).radius,
               std::vector<double>{kLocalizedFineRings});
+    // 96^3 hexes, 4 levels: the finer levels of the coarser steps, 24^3 (46,875 DOFs) and 48^3,
+    // exceed kWholeLevelMaxDofs: rings at every step.
+    o.levels = 4;
+    EXPECT_EQ(automatic_construction(o, Eigen::Vector3i(96, 96, 96), 3, true).radius,
+              std::vector<double>(3, kLocalizedFineRings));
+    // 80x40x40 hexes, 4 levels: the coarsest step's finer level 20x10x10 (7,623 DOFs) is taken
+    // whole, the next one's 40x20x20 (54,243) is not.
+    EXPECT_EQ(automatic_construction(o, Eigen::Vector3i(80, 40, 40), 3, true).radius,
+              (std::vector<double>{kInf, kLocalizedFineRings, kLocalizedFineRings}));
     o.levels = 3;
-    const auto global = [&](const Options& given, int dim, Index dofs, bool parts) {
-        const Options r = automatic_construction(given, dim, dofs, parts);
+    const auto global = [&](const Options& given, const Eigen::Vector3i& cells, int dim,
+                            bool parts) {
+        const Options r = automatic_construction(given, cells, dim, parts);
         return r.radius == std::vector<double>{kInf} && r.localization == given.localization &&
                r.patch == given.patch && r.relaxation == given.relaxation;
     };
-    EXPECT_TRUE(global(o, 3, kLocalizedMinDofs, true));  // not above the threshold
-    EXPECT_TRUE(global(o, 2, 10 * big, true));
-    EXPECT_TRUE(global(o, 3, big, false));  // no element materials, or level meshes
+    EXPECT_TRUE(global(o, small, 3, true));
+    EXPECT_TRUE(global(o, Eigen::Vector3i(512, 512, 1), 2, true));
+    EXPECT_TRUE(global(o, big, 3, false));  // no element materials, or level meshes
     const std::vector<std::function<void(Options&)>> excluded = {
         [](Options& x) { x.refinement = Refinement::Dirac; },
         [](Options& x) { x.dirichlet = DirichletTreatment::Penalty; },
@@ -168,17 +180,17 @@ TEST(MraAutomaticConstruction, LocalizedOnlyOnLargeThreeDGridsWithDefaultLocaliz
     for (std::size_t i = 0; i < excluded.size(); ++i) {
         Options x = o;
         excluded[i](x);
-        EXPECT_TRUE(global(x, 3, big, true)) << "case " << i;
+        EXPECT_TRUE(global(x, big, 3, true)) << "case " << i;
     }
     for (const DirichletTreatment t : {DirichletTreatment::Eliminate, DirichletTreatment::Ignore}) {
         Options x = o;
         x.dirichlet = t;
-        EXPECT_EQ(automatic_construction(x, 3, big, true).localization, Localization::Cell);
+        EXPECT_EQ(automatic_construction(x, big, 3, true).localization, Localization::Cell);
     }
     // A given radius is kept as it is.
     o.radius = {5};
-    EXPECT_EQ(automatic_construction(o, 3, big, true).radius, std::vector<double>{5});
-    EXPECT_EQ(automatic_construction(o, 3, big, true).localization, Localization::Node);
+    EXPECT_EQ(automatic_construction(o, big, 3, true).radius, std::vector<double>{5});
+    EXPECT_EQ(automatic_construction(o, big, 3, true).localization, Localization::Node);
 }
 
 TEST(MraAutomaticConstruction, BuildRecordsWhatItResolvedTo) {

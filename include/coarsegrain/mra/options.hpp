@@ -198,32 +198,40 @@ struct Options {
 inline constexpr int kMaxLevels = 17;
 
 /// The automatic construction's localized setting (automatic_construction): fine DOFs above
-/// which a 3D grid takes it, its patch, relaxation gamma, and the rings of its finest step.
+/// which a 3D grid takes it, its patch, relaxation gamma, the rings of its localized steps, and
+/// the largest finer level (DOFs) a coarser step takes whole. That step holds three dense
+/// #finer-by-#coarser-DOFs blocks (A^{k+1}'s solves with G^T) beside A^{k+1}'s factorization,
+/// which is about half dense there: the 80x20x20 accordion's coarse step, 14,883 and 2,268 DOFs,
+/// in 29 s; at 20,000 about 1.2 GB of blocks and a 1.6 GB factor (a dense lower triangle).
 inline constexpr Index kLocalizedMinDofs = 40000;
 inline constexpr int kLocalizedPatch = 2;
 inline constexpr double kLocalizedRelaxation = 3;
 inline constexpr double kLocalizedFineRings = 6;
+inline constexpr Index kWholeLevelMaxDofs = 20000;
 
-/// The options an empty Options::radius (automatic) stands for, on a model of `fine_dofs` DOFs
-/// (Dirichlet ones included) in `dim` dimensions; `cell_parts`: a grid whose element materials
-/// are given (the parts of cell localization). Options with a radius are returned as they are.
+/// The options an empty Options::radius (automatic) stands for, on a grid of `cells` cells per
+/// axis (the first dim entries; DOFs: dim per node, Dirichlet ones included); `cell_parts`: the
+/// model is a grid whose element materials are given (the parts of cell localization; false on
+/// level meshes). Options with a radius are returned as they are.
 ///
-/// A 3D model above kLocalizedMinDofs DOFs whose options leave the localization at its defaults
+/// A 3D grid above kLocalizedMinDofs DOFs whose options leave the localization at its defaults
 /// (node-wise, patch 1, no patch_clip, relaxation 0, defect_tolerance 0), with the linear
 /// refinement, canonical measurements, the stiffness operator and the eliminate, constrain or
 /// ignore treatment, gets the accurate localized construction: cell localization, patch
-/// kLocalizedPatch, relaxation kLocalizedRelaxation, the coarser steps on their whole level
-/// (infinite radius) and kLocalizedFineRings rings at the finest step. Every other model gets
-/// global solves (infinite radius at every step).
+/// kLocalizedPatch, relaxation kLocalizedRelaxation, kLocalizedFineRings rings at the finest
+/// step, and at each coarser step its whole level (infinite radius) if that has at most
+/// kWholeLevelMaxDofs DOFs, else kLocalizedFineRings rings. Every other model gets global
+/// solves (infinite radius at every step).
 ///
 /// Measured against global solves (3 levels; docs/mra-localization.md, "The automatic
-/// construction"): the accordion beam at 48x12x12, 64x16x16 and 80x20x20 hexes 0.67x, 0.41x
-/// and 0.63x the coarsest energy error, building in 0.73x, 0.30x and 0.42x the time with 0.7x,
-/// 0.38x and 0.54x the peak memory; 216 stiff spheres and touching cubes at 24^3 1.03x and
-/// 1.10x, with C̃ 0.32x and 0.42x as dense. Below about 40K DOFs the regions of 6 rings span
-/// most of the grid and global solves take seconds; in 2D global solves fill in little; the
-/// Dirac refinement's relaxed basis does not localize (validate).
-Options automatic_construction(Options options, int dim, Index fine_dofs, bool cell_parts);
+/// construction"): 0.40x, 0.63x the coarsest energy error on the accordion beam at 64x16x16 and
+/// 80x20x20 hexes, 1.006x on a hung checker slab (48x48x8), 1.0003x on Table 1's box (40x20x20),
+/// 1.03x and 1.10x on 216 stiff spheres and touching cubes at 24^3; C̃ 0.32-0.48x as dense, in
+/// 0.29-0.61x the build time and 0.30-0.54x the peak memory. Below about 40K DOFs the regions of
+/// 6 rings span most of the grid and global solves take seconds; in 2D global solves fill in
+/// little; the Dirac refinement's relaxed basis does not localize (validate).
+Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
+                               bool cell_parts);
 
 /// Checks the options' ranges and combinations (the Options fields name the scene's coarse.*
 /// keys): levels in 2..kMaxLevels; no radius (automatic), one or levels - 1, each >= 1 (or
