@@ -1078,9 +1078,9 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
         for (std::size_t s = 0; s < S.size(); ++s)
             local[static_cast<std::size_t>(S[s])] = static_cast<Index>(s);
     };
-    // Every region spanning the level: the parts' right-hand sides sum to Φ A^q (C Φ)^T = A C^T
-    // (sum_T A_T = A^q, A = Φ A^q Φ^T), solved at once, without forming C Φ (on a coarse level
-    // the sum over the parts' fine elements costs more than the step).
+    // Every region spanning the level: the step on the whole level, in the basis of the
+    // measurements G, without the parts' right-hand sides or C Φ (on a coarse level the sum over
+    // the parts' fine elements costs more than the step).
     if (regions_span_level(parts, rings, g)) return whole_level_refinement(A, G, penalty);
     CG_ASSERT(Phi.rows() == A.rows(), "mra: relaxed step without its fine functions");
     return cell_corrections(penalized(A, G, penalty), static_cast<Index>(A.rows()), interior, Phi,
