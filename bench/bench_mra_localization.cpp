@@ -136,6 +136,7 @@ int main(int argc, char** argv) {
     base.levels = levels;
     base.refinement = cg::mra::Refinement::Linear;
     base.truncation = 0;
+    base.radius = {std::numeric_limits<double>::infinity()};  // the global row
     header();
     for (const Problem& pr : problems) {
         const cg::test::GridProblem p = make(pr, cells, pr.contrast);
