@@ -205,6 +205,13 @@ bool cell_wise(const Options& options) {
            (options.relaxation > 0 || any_finite(options.radius));
 }
 
+/// The treatment keeps the fine operator the sum of the element matrices (no penalty), as the
+/// parts of cell localization need.
+bool element_operator(DirichletTreatment t) {
+    return t == DirichletTreatment::Eliminate || t == DirichletTreatment::Constrain ||
+           t == DirichletTreatment::Ignore;
+}
+
 }  // namespace
 
 Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
@@ -221,11 +228,8 @@ Options automatic_construction(Options options, const Eigen::Vector3i& cells, in
         options.localization != defaults.localization || options.patch != defaults.patch ||
         options.patch_clip != defaults.patch_clip || options.relaxation != defaults.relaxation ||
         options.defect_tolerance != defaults.defect_tolerance;
-    const bool element_parts = options.dirichlet == DirichletTreatment::Eliminate ||
-                               options.dirichlet == DirichletTreatment::Constrain ||
-                               options.dirichlet == DirichletTreatment::Ignore;
     const bool localized = dim == 3 && cell_parts && level_dofs(0) > kLocalizedMinDofs &&
-                           !localization_given && element_parts &&
+                           !localization_given && element_operator(options.dirichlet) &&
                            options.refinement == Refinement::Linear &&
                            options.measurement == Measurement::Canonical &&
                            options.fine_operator == Operator::Stiffness;
@@ -262,9 +266,7 @@ void validate(const Options& options) {
         CG_VERIFY(options.patch == 1 || !options.patch_clip,
                   "mra: cell localization does not clip patches (patch_clip): each cell's share "
                   "of the right-hand side is solved on its whole patch");
-        CG_VERIFY(options.dirichlet == DirichletTreatment::Eliminate ||
-                      options.dirichlet == DirichletTreatment::Constrain ||
-                      options.dirichlet == DirichletTreatment::Ignore,
+        CG_VERIFY(element_operator(options.dirichlet),
                   "mra: cell localization needs the eliminate, constrain or ignore Dirichlet "
                   "treatment (the penalty is not part of the element matrices), got {}",
                   dirichlet_name(options.dirichlet));
