@@ -13,7 +13,6 @@
 namespace coarsegrain::app {
 
 using coarsen::fine_sizes;
-using coarsen::peak_rss_mb;
 using coarsen::timings_json;
 using coarsen::to_std;
 

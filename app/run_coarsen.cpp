@@ -203,7 +203,7 @@ MethodResult run_method(const scene::Scene& sc, FineRun& f, const std::string& m
         {"fine_strain_energy", f.solution.strain_energy},
         {"fine_vtu", fine_vtu},
         {"plots", plots},
-        {"peak_memory_mb", peak_rss_mb()},
+        {"peak_memory_mb", peak_resident_mb()},
     };
     write_summary(dir.string(), r.summary);
     if (keep_model) {
@@ -242,7 +242,7 @@ void run_one(const scene::Scene& sc, const std::string& method, const fs::path& 
     std::printf(
         "  wrote %s/summary.json, solution_fine.vtu, solution_coarse.vtu and the method's "
         "files (peak memory %.0f MB)\n",
-        dir.c_str(), peak_rss_mb());
+        dir.c_str(), peak_resident_mb());
 }
 
 // One method of a comparison: its result, or its failure (the reason, and no folder) if it
@@ -329,7 +329,7 @@ int finish_comparison(const scene::Scene& sc, const std::string& command, const 
         {"failed_methods", failed},
         {"report", "report.md"},
         {"plots", plots},
-        {"peak_memory_mb", peak_rss_mb()},
+        {"peak_memory_mb", peak_resident_mb()},
     };
     if (dynamics) summary["dynamics"] = *dynamics;
     write_summary(dir.string(), summary);
@@ -345,7 +345,7 @@ int run_comparison(const scene::Scene& sc, const std::vector<std::string>& metho
     std::printf(
         "  wrote %s/report.md, summary.json, solution_fine.vtu and a folder per method "
         "(peak memory %.0f MB)\n",
-        dir.c_str(), peak_rss_mb());
+        dir.c_str(), peak_resident_mb());
     return failed;
 }
 
@@ -386,7 +386,7 @@ int run_demo(const scene::Scene& sc, const std::string& out_dir, double read_sec
     std::printf(
         "  wrote %s/report.md, summary.json, solution_fine.vtu, a folder per method and %s/ "
         "(peak memory %.0f MB)\n",
-        dir.c_str(), kDemoDynamicsFolder, peak_rss_mb());
+        dir.c_str(), kDemoDynamicsFolder, peak_resident_mb());
     return failed;
 }
 

@@ -53,7 +53,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
         {"max_displacement", max_u},
         {"strain_energy", sol.strain_energy},
         {"compliance", model.f.dot(sol.u)},
-        {"peak_memory_mb", peak_rss_mb()},
+        {"peak_memory_mb", peak_resident_mb()},
     };
     if (sol.newton) summary["newton"] = newton_json(*sol.newton, sc.corotation);
     if (linear_max_u) summary["linear_max_displacement"] = *linear_max_u;
@@ -78,7 +78,7 @@ void run_solve(const scene::Scene& sc, const std::string& out_dir, double read_s
         std::printf("  u(%s) = (%s)\n", fmt::format("{:g}", fmt::join(sc.probes[i], ", ")).c_str(),
                     fmt::format("{:.6g}", fmt::join(probes[i], ", ")).c_str());
     std::printf("  wrote %s/solution_fine.vtu and %s/summary.json (peak memory %.0f MB)\n",
-                out_dir.c_str(), out_dir.c_str(), peak_rss_mb());
+                out_dir.c_str(), out_dir.c_str(), peak_resident_mb());
 }
 
 }  // namespace coarsegrain::app

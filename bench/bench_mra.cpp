@@ -16,6 +16,8 @@
 // eliminated, as a fine FEM solves) runs before the build, so that its factor is freed first;
 // factorize and solve times are medians of up to 5 runs (as many as fit in 2 s). fine_timing 0
 // skips that timing (at 64^3 hexes it takes as long as the reference solve: about 15 minutes).
+// Phases longer than a second are reported on stderr as they end, with the process's peak
+// resident memory so far (the phase where it grows is where the memory went).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -27,6 +29,7 @@
 #include <vector>
 
 #include "coarsegrain/common/allocator.hpp"
+#include "coarsegrain/common/progress.hpp"
 #include "coarsegrain/fem/dirichlet.hpp"
 #include "coarsegrain/mra/multilevel_solver.hpp"
 #include "coarsegrain/scene/scene.hpp"
@@ -214,6 +217,7 @@ int run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
     cg::retain_freed_memory();
+    cg::set_progress_enabled(true);  // phases over a second on stderr, with the peak so far
     try {
         return run(argc, argv);
     } catch (const std::exception& e) {

@@ -306,7 +306,7 @@ nlohmann::json with_methods(nlohmann::json summary, const std::vector<nlohmann::
         summary["methods"] = entries;
         summary["failed_methods"] = failed;
     }
-    summary["peak_memory_mb"] = peak_rss_mb();
+    summary["peak_memory_mb"] = peak_resident_mb();
     return summary;
 }
 

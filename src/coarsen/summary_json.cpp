@@ -1,14 +1,6 @@
 #include "coarsegrain/coarsen/summary_json.hpp"
 
-#include <sys/resource.h>
-
 namespace coarsegrain::coarsen {
-
-double peak_rss_mb() {
-    rusage r{};
-    getrusage(RUSAGE_SELF, &r);
-    return static_cast<double>(r.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
 
 std::vector<double> to_std(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 

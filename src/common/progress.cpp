@@ -1,6 +1,7 @@
 #include "coarsegrain/common/progress.hpp"
 
 #include <omp.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <condition_variable>
@@ -24,6 +25,11 @@ void progress_line(const std::string& text) {
     if (!progress_enabled()) return;
     const std::lock_guard<std::mutex> lock(g_print);
     std::fprintf(stderr, "coarsegrain: %s\n", text.c_str());
+}
+double peak_resident_mb() {
+    rusage r{};
+    getrusage(RUSAGE_SELF, &r);
+    return static_cast<double>(r.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 void request_interrupt() { g_interrupt = true; }
 void clear_interrupt() { g_interrupt = false; }
@@ -86,7 +92,8 @@ double Phase::stop() {
         m_watch->thread.join();
         if (m_watch->announced) {
             const std::lock_guard print(g_print);
-            std::fprintf(stderr, "coarsegrain: %s done in %.2f s\n", m_name.c_str(), seconds);
+            std::fprintf(stderr, "coarsegrain: %s done in %.2f s, peak %.1f GB\n", m_name.c_str(),
+                         seconds, peak_resident_mb() / 1024.0);
         }
     }
     return seconds;

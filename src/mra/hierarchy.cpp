@@ -216,19 +216,17 @@ bool element_operator(DirichletTreatment t) {
 
 Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
                                bool cell_parts) {
-    if (!options.radius.empty()) return options;
-    // DOFs of the level whose cells per axis are the fine grid's halved `halvings` times.
-    const auto level_dofs = [&](int halvings) {
-        Index nodes = 1;
-        for (int d = 0; d < dim; ++d) nodes *= (cells[d] >> halvings) + 1;
-        return dim * nodes;
-    };
+    // Levels out of range are left to validate's message.
+    if (!options.radius.empty() || options.levels < 2 || options.levels > kMaxLevels)
+        return options;
+    Index dofs = dim;  // of the fine grid
+    for (int d = 0; d < dim; ++d) dofs *= cells[d] + 1;
     const Options defaults;
     const bool localization_given =
         options.localization != defaults.localization || options.patch != defaults.patch ||
         options.patch_clip != defaults.patch_clip || options.relaxation != defaults.relaxation ||
         options.defect_tolerance != defaults.defect_tolerance;
-    const bool localized = dim == 3 && cell_parts && level_dofs(0) > kLocalizedMinDofs &&
+    const bool localized = dim == 3 && cell_parts && dofs > kLocalizedMinDofs &&
                            !localization_given && element_operator(options.dirichlet) &&
                            options.refinement == Refinement::Linear &&
                            options.measurement == Measurement::Canonical &&
@@ -241,13 +239,10 @@ Options automatic_construction(Options options, const Eigen::Vector3i& cells, in
     options.localization = Localization::Cell;
     options.patch = kLocalizedPatch;
     options.relaxation = kLocalizedRelaxation;
-    // Step k (radius[k - 1]) builds level k from level k + 1, the fine grid halved q - 1 - k
-    // times; the finest step is always localized.
-    const int q = options.levels;
-    options.radius.resize(static_cast<std::size_t>(q - 1));
-    for (int k = 1; k < q; ++k)
-        options.radius[static_cast<std::size_t>(k - 1)] =
-            k < q - 1 && level_dofs(q - 1 - k) <= kWholeLevelMaxDofs ? global : kLocalizedFineRings;
+    // Step k (radius[k - 1]) builds level k from level k + 1: the finest one (k = q - 1) in
+    // rings, the coarser ones on their whole level.
+    options.radius.assign(static_cast<std::size_t>(options.levels - 1), global);
+    options.radius.back() = kLocalizedFineRings;
     return options;
 }
 

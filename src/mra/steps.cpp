@@ -1021,25 +1021,39 @@ bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, cons
     });
 }
 
+/// Columns of G^T whole_level_refinement solves at once: CHOLMOD's supernodal solves are
+/// matrix-matrix products from a few dozen columns on.
+constexpr Index kWholeLevelColumns = 256;
+
 SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G, double penalty) {
     CG_VERIFY(A.rows() == A.cols() && G.cols() == A.rows() && penalty > 0,
               "mra: step on the whole level with a {}x{} operator, {}x{} measurements and "
               "penalty {}",
               A.rows(), A.cols(), G.rows(), G.cols(), penalty);
-    const Matrix Gt(G.transpose());
     solve::SpdSolver solver;
     try {
         solver.compute(A);
     } catch (const NotPositiveDefinite&) {
         solver.compute(penalized(A, G, penalty));
     }
-    const Matrix Y = solver.solve(Gt);  // A^{-1} G^T, or M^{-1} G^T
+    // Y = A^{-1} G^T (or M^{-1} G^T) by blocks of kWholeLevelColumns columns, so that one dense
+    // #finer-by-#coarser block is alive besides small ones until Y^T is formed.
+    const SparseMatrix Gt = G.transpose();
+    Matrix Y(A.rows(), G.rows());
+    for (Index c0 = 0; c0 < G.rows(); c0 += kWholeLevelColumns) {
+        const Index c = std::min<Index>(kWholeLevelColumns, G.rows() - c0);
+        Y.middleCols(c0, c) = solver.solve(Matrix(Gt.middleCols(c0, c)));
+    }
+    solver = solve::SpdSolver();
     solve::DenseCholesky GY;
     CG_VERIFY(GY.compute(sparse_times_dense(G, Y)) == 0,
               "mra: step on the whole level: G A^-1 G^T ({} measurements) is not definite: the "
               "measurements are dependent",
               G.rows());
-    SparseMatrix out = GY.solve(Matrix(Y.transpose())).sparseView(0.0, 0.0);
+    Matrix Ct = Y.transpose();
+    Y = Matrix();
+    GY.solve_in_place(Ct);
+    SparseMatrix out = Ct.sparseView(0.0, 0.0);
     out.makeCompressed();
     return out;
 }

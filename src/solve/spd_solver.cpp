@@ -472,15 +472,19 @@ Index DenseCholesky::compute(Matrix A) {
 }
 
 Matrix DenseCholesky::solve(const Matrix& b) const {
+    Matrix x = b;
+    solve_in_place(x);
+    return x;
+}
+
+void DenseCholesky::solve_in_place(Matrix& b) const {
     CG_VERIFY(m_ok, "dense Cholesky: solve called before a successful compute");
     CG_VERIFY(b.rows() == m_factor.rows(),
               "dense Cholesky: the right-hand side has {} rows, the matrix {}", b.rows(),
               m_factor.rows());
-    Matrix x = b;
     const auto L = m_factor.triangularView<Eigen::Lower>();
-    L.solveInPlace(x);
-    L.transpose().solveInPlace(x);
-    return x;
+    L.solveInPlace(b);
+    L.transpose().solveInPlace(b);
 }
 
 IndexVector fill_reducing_order(const SparseMatrix& A, int node_dofs, bool nested_dissection) {

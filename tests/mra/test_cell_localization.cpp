@@ -143,15 +143,16 @@ TEST(MraAutomaticConstruction, LocalizedOnlyOnLargeThreeDGridsWithDefaultLocaliz
     o.levels = 2;
     EXPECT_EQ(automatic_construction(o, big, 3, true).radius,
               std::vector<double>{kLocalizedFineRings});
-    // 96^3 hexes, 4 levels: the finer levels of the coarser steps, 24^3 (46,875 DOFs) and 48^3,
-    // exceed kWholeLevelMaxDofs: rings at every step.
+    // 96^3 hexes, 4 levels: every coarser step on its whole level, whatever its size.
     o.levels = 4;
     EXPECT_EQ(automatic_construction(o, Eigen::Vector3i(96, 96, 96), 3, true).radius,
-              std::vector<double>(3, kLocalizedFineRings));
-    // 80x40x40 hexes, 4 levels: the coarsest step's finer level 20x10x10 (7,623 DOFs) is taken
-    // whole, the next one's 40x20x20 (54,243) is not.
-    EXPECT_EQ(automatic_construction(o, Eigen::Vector3i(80, 40, 40), 3, true).radius,
-              (std::vector<double>{kInf, kLocalizedFineRings, kLocalizedFineRings}));
+              (std::vector<double>{kInf, kInf, kLocalizedFineRings}));
+    // Levels out of range: left as they are, for validate's message.
+    for (const int levels : {1, kMaxLevels + 1}) {
+        o.levels = levels;
+        EXPECT_TRUE(automatic_construction(o, big, 3, true).radius.empty());
+        EXPECT_THROW(validate(automatic_construction(o, big, 3, true)), Error);
+    }
     o.levels = 3;
     const auto global = [&](const Options& given, const Eigen::Vector3i& cells, int dim,
                             bool parts) {

@@ -8,9 +8,6 @@
 
 namespace coarsegrain::coarsen {
 
-/// Peak resident memory of this process in MB (summary.json "peak_memory_mb").
-double peak_rss_mb();
-
 /// The entries of v as a std::vector (a JSON array).
 std::vector<double> to_std(const Eigen::VectorXd& v);
 

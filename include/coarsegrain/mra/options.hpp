@@ -198,30 +198,24 @@ struct Options {
 inline constexpr int kMaxLevels = 17;
 
 /// The automatic construction's localized setting (automatic_construction): fine DOFs above
-/// which a 3D grid takes it, its patch, relaxation gamma, the rings of its localized steps, and
-/// the largest finer level (DOFs) a coarser step takes whole. That step holds three dense
-/// #finer-by-#coarser-DOFs blocks (A^{k+1}'s solves with G^T) beside A^{k+1}'s factorization,
-/// which is about half dense there: the 80x20x20 accordion's coarse step, 14,883 and 2,268 DOFs,
-/// in 29 s; at 20,000 about 1.2 GB of blocks and a 1.6 GB factor (a dense lower triangle).
+/// which a 3D grid takes it, its patch, relaxation gamma and the rings of its finest step.
 inline constexpr Index kLocalizedMinDofs = 40000;
 inline constexpr int kLocalizedPatch = 2;
 inline constexpr double kLocalizedRelaxation = 3;
 inline constexpr double kLocalizedFineRings = 6;
-inline constexpr Index kWholeLevelMaxDofs = 20000;
 
 /// The options an empty Options::radius (automatic) stands for, on a grid of `cells` cells per
 /// axis (the first dim entries; DOFs: dim per node, Dirichlet ones included); `cell_parts`: the
 /// model is a grid whose element materials are given (the parts of cell localization; false on
-/// level meshes). Options with a radius are returned as they are.
+/// level meshes). Options with a radius, or with levels out of range, are returned as they are.
 ///
 /// A 3D grid above kLocalizedMinDofs DOFs whose options leave the localization at its defaults
 /// (node-wise, patch 1, no patch_clip, relaxation 0, defect_tolerance 0), with the linear
 /// refinement, canonical measurements, the stiffness operator and the eliminate, constrain or
 /// ignore treatment, gets the accurate localized construction: cell localization, patch
 /// kLocalizedPatch, relaxation kLocalizedRelaxation, kLocalizedFineRings rings at the finest
-/// step, and at each coarser step its whole level (infinite radius) if that has at most
-/// kWholeLevelMaxDofs DOFs, else kLocalizedFineRings rings. Every other model gets global
-/// solves (infinite radius at every step).
+/// step and every coarser step on its whole level (infinite radius). Every other model gets
+/// global solves (infinite radius at every step).
 ///
 /// Measured against global solves (3 levels; docs/mra-localization.md, "The automatic
 /// construction"): 0.40x, 0.63x the coarsest energy error on the accordion beam at 64x16x16 and
@@ -229,9 +223,13 @@ inline constexpr Index kWholeLevelMaxDofs = 20000;
 /// 1.03x and 1.10x on 216 stiff spheres and touching cubes at 24^3; C̃ 0.32-0.48x as dense, in
 /// 0.29-0.61x the build time and 0.30-0.54x the peak memory. Below about 40K DOFs the regions of
 /// 6 rings span most of the grid and global solves take seconds; in 2D global solves fill in
-/// little; the Dirac refinement's relaxed basis does not localize (validate). Beyond about 100K
-/// DOFs with 3 levels the build grows faster than the grid: the 32^3 hung checker (107,811 DOFs)
-/// in 145 s and 9.1 GB, 40^3 out of memory on 24 GB (global solves fit neither).
+/// little; the Dirac refinement's relaxed basis does not localize (validate). A coarser step in
+/// rings is less accurate, slower and larger than on its whole level, whose finer functions
+/// already reach about 8 of its nodes (hung checker at 32^3: 3 rings 0.2716 against 0.2597, 59 s
+/// against 31 s, peak 12.4 against 9.1 GB; at 40^3 6 rings ran out of memory, the whole level
+/// took 145 s). The whole-level step factorizes A^{k+1}, so the build stops growing about
+/// linearly where that factor stops fitting: the 40^3 hung checker (206,763 DOFs) built in
+/// 363 s with a 17.8 GB peak.
 Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
                                bool cell_parts);
 

@@ -100,6 +100,9 @@ class DenseCholesky {
     /// Solves A x = b (n by k).
     /// @throws Error without a successful compute, or on a size mismatch
     Matrix solve(const Matrix& b) const;
+    /// b <- A^{-1} b, without a copy of b.
+    /// @throws Error without a successful compute, or on a size mismatch
+    void solve_in_place(Matrix& b) const;
     /// L (lower triangle; the upper holds what A had there).
     const Matrix& factor() const { return m_factor; }
 
