@@ -630,13 +630,23 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 detail::rigid_left_inverse(L.C, L.C_dagger, g, rig_next, positions, rotation_scale);
         }
         const SparseMatrix& A = *A_next;
+        // B^k as the hierarchy keeps it: its lower triangle, or none.
+        const auto store_B = [&] {
+            if (options.store_wavelet_stiffness) {
+                L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
+                L.B.makeCompressed();
+            } else {
+                L.B = SparseMatrix();
+            }
+        };
         SparseMatrix R;
         {
             const Phase phase(tag + "B", &h.timings);
-            // The relaxed cell-wise solves do not read B^k.
+            // The relaxed cell-wise solves do not read B^k: it is stored before them.
             if (!relaxed || options.store_wavelet_stiffness)
                 L.B = detail::symmetrized(
                     detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
+            if (relaxed) store_B();
             if (!step_by_cell)
                 R = detail::triple_product(L.W, A, SparseMatrix(L.C_dagger.transpose()));
         }
@@ -706,12 +716,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             L.region_rings = std::move(lz.rings);
         }
         R = SparseMatrix();
-        if (options.store_wavelet_stiffness) {
-            L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
-            L.B.makeCompressed();
-        } else {
-            L.B = SparseMatrix();
-        }
+        if (!relaxed) store_B();
 
         // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node (their
         // pivots' finest node); blind, the DOFs held at zero when this level is solved.
