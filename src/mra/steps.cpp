@@ -1036,8 +1036,9 @@ SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G
     } catch (const NotPositiveDefinite&) {
         solver.compute(penalized(A, G, penalty));
     }
-    // Y = A^{-1} G^T (or M^{-1} G^T) by blocks of kWholeLevelColumns columns, so that one dense
-    // #finer-by-#coarser block is alive besides small ones until Y^T is formed.
+    // Y = A^{-1} G^T (or M^{-1} G^T) by blocks of kWholeLevelColumns columns, and C̃ = (G Y)^{-1}
+    // Y^T in place: at most two dense #finer-by-#coarser blocks are alive at once (Y and Y^T while
+    // it is copied, then C̃ and its sparse copy), and A's factor is freed before them.
     const SparseMatrix Gt = G.transpose();
     Matrix Y(A.rows(), G.rows());
     for (Index c0 = 0; c0 < G.rows(); c0 += kWholeLevelColumns) {

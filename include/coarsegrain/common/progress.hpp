@@ -10,13 +10,13 @@ namespace coarsegrain {
 
 /// Wall-clock seconds of named phases, in the order they ran.
 class Timings {
-public:
+  public:
     void add(const std::string& phase, double seconds);
     /// Seconds of a phase (summed over repeats), 0 if it never ran.
     double operator[](const std::string& phase) const;
     const std::vector<std::pair<std::string, double>>& entries() const { return m_entries; }
 
-private:
+  private:
     std::vector<std::pair<std::string, double>> m_entries;
 };
 
@@ -46,7 +46,7 @@ double peak_resident_mb();
 /// went); phases shorter than a second print nothing. The time is added to `timings` (if given)
 /// when the phase ends or stop() is called.
 class Phase {
-public:
+  public:
     /// @throws Interrupted if an interrupt is requested (request_interrupt) and the phase does
     ///         not start inside an OpenMP parallel region
     Phase(std::string name, Timings* timings = nullptr);
@@ -56,7 +56,7 @@ public:
     /// Ends the phase now; returns its seconds.
     double stop();
 
-private:
+  private:
     struct Watch;
     std::string m_name;
     Timings* m_timings;

@@ -225,11 +225,11 @@ inline constexpr double kLocalizedFineRings = 6;
 /// 6 rings span most of the grid and global solves take seconds; in 2D global solves fill in
 /// little; the Dirac refinement's relaxed basis does not localize (validate). A coarser step in
 /// rings is less accurate, slower and larger than on its whole level, whose finer functions
-/// already reach about 8 of its nodes (hung checker at 32^3: 3 rings 0.2716 against 0.2597, 59 s
-/// against 31 s, peak 12.4 against 9.1 GB; at 40^3 6 rings ran out of memory, the whole level
-/// took 145 s). The whole-level step factorizes A^{k+1}, so the build stops growing about
-/// linearly where that factor stops fitting: the 40^3 hung checker (206,763 DOFs) built in
-/// 363 s with a 17.8 GB peak.
+/// already reach about 7 of its nodes (hung checker at 32^3: 3 rings 0.2716 against 0.2597, 59 s
+/// against 31 s, peak 12.4 against 9.1 GB; at 40^3 6 rings ran out of memory). The whole-level
+/// step factorizes A^{k+1}, a quarter to half dense, so the build grows faster than the grid: the
+/// hung checker at 24^3 / 32^3 / 40^3 hexes in 36 / 114 / 371 s with a 2.7 / 7.4 / 14.8 GB peak,
+/// and 48^3 (352,947 DOFs) out of memory on 24 GB.
 Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
                                bool cell_parts);
 
