@@ -630,23 +630,16 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 detail::rigid_left_inverse(L.C, L.C_dagger, g, rig_next, positions, rotation_scale);
         }
         const SparseMatrix& A = *A_next;
-        // B^k as the hierarchy keeps it: its lower triangle, or none.
-        const auto store_B = [&] {
-            if (options.store_wavelet_stiffness) {
-                L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
-                L.B.makeCompressed();
-            } else {
-                L.B = SparseMatrix();
-            }
-        };
         SparseMatrix R;
         {
             const Phase phase(tag + "B", &h.timings);
-            // The relaxed cell-wise solves do not read B^k: it is stored before them.
-            if (!relaxed || options.store_wavelet_stiffness)
+            // The relaxed cell-wise solves do not read B^k, which is then made as it is kept,
+            // its lower triangle; the other solves read it whole.
+            if (relaxed && options.store_wavelet_stiffness)
+                L.B = detail::congruence(L.W, A, detail::consecutive_groups(L.W.rows(), 8 * dim));
+            else if (!relaxed)
                 L.B = detail::symmetrized(
                     detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
-            if (relaxed) store_B();
             if (!step_by_cell)
                 R = detail::triple_product(L.W, A, SparseMatrix(L.C_dagger.transpose()));
         }
@@ -716,7 +709,12 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             L.region_rings = std::move(lz.rings);
         }
         R = SparseMatrix();
-        if (!relaxed) store_B();
+        if (!relaxed && options.store_wavelet_stiffness) {
+            L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
+            L.B.makeCompressed();
+        } else if (!relaxed) {
+            L.B = SparseMatrix();
+        }
 
         // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node (their
         // pivots' finest node); blind, the DOFs held at zero when this level is solved.

@@ -583,6 +583,16 @@ SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
     return grouped_congruence<kMaxGroup>(M, Mt, X, groups);
 }
 
+std::vector<IndexVector> consecutive_groups(Index n, Index size) {
+    CG_VERIFY(n >= 0 && size >= 1 && size <= kMaxGroup,
+              "mra: {} rows in groups of {} (1..{})", n, size, kMaxGroup);
+    std::vector<IndexVector> groups;
+    for (Index first = 0; first < n; first += size)
+        groups.push_back(IndexVector::LinSpaced(std::min(size, n - first), first,
+                                                first + std::min(size, n - first) - 1));
+    return groups;
+}
+
 std::vector<IndexVector> node_blocks(const IndexVector& dofs, const Eigen::Vector3i& cells, int dim,
                                      int side) {
     const Eigen::Vector3i nodes = node_counts(cells, dim);

@@ -53,6 +53,10 @@ SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
 /// Largest group congruence takes.
 constexpr Index kMaxGroup = 32;
 
+/// Rows 0..n-1 in groups of `size` consecutive ones (the last may be shorter), for congruence
+/// where the rows have no positions (the wavelets of W^k, in the order of their fine DOFs).
+std::vector<IndexVector> consecutive_groups(Index n, Index size);
+
 /// The DOFs `dofs` (grid DOF indices, sorted, dim per node) of a grid with `cells` per axis,
 /// grouped by blocks of side^dim nodes (block index floor(x / side) per axis); each group
 /// lists positions in `dofs`, ascending. Empty blocks are left out.

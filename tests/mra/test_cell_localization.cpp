@@ -104,6 +104,28 @@ TEST_P(MraCellLocalized, RelaxedWithRegionsCoveringTheGridGivesTheGlobalSpace) {
     }
 }
 
+TEST_P(MraCellLocalized, RelaxedConstructionKeepsTheWaveletStiffness) {
+    // The relaxed solves do not read B^k = W^k A^{k+1} W^{k,T}, which is then formed as the
+    // hierarchy keeps it, its lower triangle (a grouped congruence); against Eigen's products,
+    // the same sums in another order: 1e-12 relative.
+    const int dim = GetParam();
+    const Eigen::Vector3i cells = dim == 2 ? Eigen::Vector3i(16, 16, 1) : Eigen::Vector3i(8, 8, 8);
+    const test::GridProblem p = test::hung_problem(dim, cells, 1.0, 1e3, test::checker_pattern);
+    Options o = cell_options(3, Refinement::Linear, 2);
+    o.relaxation = 3;
+    o.patch = 2;
+    const Hierarchy h = build_hierarchy(p.mesh, p.K, p.bc.dofs, o, &p.materials);
+    for (int k = 1; k < 3; ++k) {
+        const Level& L = h.level(k);
+        const SparseMatrix A = k == 2 ? h.A_fine : symmetric_from_lower(h.level(k + 1).A);
+        const Matrix B = Matrix(L.W * A * SparseMatrix(L.W.transpose()));
+        ASSERT_GT(L.B.rows(), 0) << "level " << k;
+        EXPECT_EQ(Matrix(L.B).triangularView<Eigen::StrictlyUpper>().toDenseMatrix().norm(), 0.0);
+        EXPECT_LT((Matrix(symmetric_from_lower(L.B)) - B).norm(), 1e-12 * B.norm())
+            << "level " << k;
+    }
+}
+
 TEST_P(MraCellLocalized, RelaxedOnEveryWholeLevelIsTheGlobalHierarchy) {
     // An infinite radius with relaxation takes each step on the whole level in the basis of its
     // measurements G, C̃^T = A^{-1} G^T (G A^{-1} G^T)^{-1}: at the finest step G = C, which is
