@@ -584,12 +584,13 @@ SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
 }
 
 std::vector<IndexVector> consecutive_groups(Index n, Index size) {
-    CG_VERIFY(n >= 0 && size >= 1 && size <= kMaxGroup,
-              "mra: {} rows in groups of {} (1..{})", n, size, kMaxGroup);
+    CG_VERIFY(n >= 0 && size >= 1 && size <= kMaxGroup, "mra: {} rows in groups of {} (1..{})", n,
+              size, kMaxGroup);
     std::vector<IndexVector> groups;
-    for (Index first = 0; first < n; first += size)
-        groups.push_back(IndexVector::LinSpaced(std::min(size, n - first), first,
-                                                first + std::min(size, n - first) - 1));
+    for (Index first = 0; first < n; first += size) {
+        const Index count = std::min(size, n - first);
+        groups.push_back(IndexVector::LinSpaced(count, first, first + count - 1));
+    }
     return groups;
 }
 
