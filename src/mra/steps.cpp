@@ -1021,8 +1021,8 @@ bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, cons
     });
 }
 
-/// Columns of G^T whole_level_refinement solves at once: CHOLMOD's supernodal solves are
-/// matrix-matrix products from a few dozen columns on.
+/// Columns of G^T whole_level_refinement solves at once: the solves stay matrix-matrix products
+/// while the block stays small (27,783 by 256 doubles, 57 MB, at the 40^3 checker's coarse step).
 constexpr Index kWholeLevelColumns = 256;
 
 SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G, double penalty) {
