@@ -6,6 +6,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdio>
+#include <exception>
 #include <mutex>
 #include <thread>
 
@@ -57,6 +58,8 @@ struct Phase::Watch {
     bool done = false;
     bool announced = false;
     std::thread thread;
+    // Exceptions in flight when the phase began: more at its end means an error ended it.
+    int exceptions = std::uncaught_exceptions();
 };
 
 Phase::Phase(std::string name, Timings* timings)
@@ -91,9 +94,11 @@ double Phase::stop() {
         m_watch->cv.notify_one();
         m_watch->thread.join();
         if (m_watch->announced) {
+            const bool failed = std::uncaught_exceptions() > m_watch->exceptions;
             const std::lock_guard print(g_print);
-            std::fprintf(stderr, "coarsegrain: %s done in %.2f s, peak %.1f GB\n", m_name.c_str(),
-                         seconds, peak_resident_mb() / 1024.0);
+            std::fprintf(stderr, "coarsegrain: %s %s %.2f s, peak %.1f GB\n", m_name.c_str(),
+                         failed ? "stopped by an error after" : "done in", seconds,
+                         peak_resident_mb() / 1024.0);
         }
     }
     return seconds;

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstring>
 #include <regex>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -28,6 +29,8 @@ TEST(PhaseProgress, EndLineGivesSecondsAndThePeakSoFar) {
     Timings timings;
     {
         const Phase phase("a long phase", &timings);
+        std::vector<char> held(std::size_t{256} << 20);  // 0.25 GB resident during the phase
+        std::memset(held.data(), 1, held.size());
         std::this_thread::sleep_for(std::chrono::milliseconds(1100));
     }
     const std::string out = testing::internal::GetCapturedStderr();
@@ -38,9 +41,26 @@ TEST(PhaseProgress, EndLineGivesSecondsAndThePeakSoFar) {
         << out;
     EXPECT_GE(std::stod(m[1]), 1.1);
     EXPECT_NEAR(std::stod(m[1]), timings["a long phase"], 0.01);
-    // One decimal of GB: the mark read after the phase, which can only have grown since.
+    // One decimal of GB: at least the 0.25 GB held during the phase, at most the mark read
+    // after it, which can only have grown since.
+    EXPECT_GE(std::stod(m[2]), 0.25 - 0.05);
     EXPECT_LE(std::stod(m[2]), peak_resident_mb() / 1024.0 + 0.05);
-    EXPECT_GT(std::stod(m[2]), 0.0);
+}
+
+TEST(PhaseProgress, PhaseEndedByAnErrorSaysSo) {
+    set_progress_enabled(true);
+    testing::internal::CaptureStderr();
+    try {
+        const Phase phase("a failing phase");
+        std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+        throw std::runtime_error("out of memory");
+    } catch (const std::runtime_error&) {
+    }
+    const std::string out = testing::internal::GetCapturedStderr();
+    set_progress_enabled(false);
+    EXPECT_NE(out.find("coarsegrain: a failing phase stopped by an error after"), std::string::npos)
+        << out;
+    EXPECT_EQ(out.find("done in"), std::string::npos) << out;
 }
 
 }  // namespace

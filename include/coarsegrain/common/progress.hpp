@@ -43,7 +43,8 @@ double peak_resident_mb();
 /// Times one phase (RAII). If the phase is still running after one second, a line
 /// "coarsegrain: <phase> ..." goes to stderr, and "coarsegrain: <phase> done in 2.31 s, peak
 /// 3.2 GB" when it ends (the process's peak so far: the phase where it grows is where the memory
-/// went); phases shorter than a second print nothing. The time is added to `timings` (if given)
+/// went), or "... stopped by an error after 2.31 s, peak 3.2 GB" when an exception ends it;
+/// phases shorter than a second print nothing. The time is added to `timings` (if given)
 /// when the phase ends or stop() is called.
 class Phase {
   public:
