@@ -228,7 +228,7 @@ inline constexpr double kLocalizedFineRings = 6;
 /// already reach about 7 of its nodes (hung checker at 32^3: 3 rings 0.2716 against 0.2597, 59 s
 /// against 31 s, peak 12.4 against 9.1 GB; at 40^3 6 rings ran out of memory). The whole-level
 /// step factorizes A^{k+1}, a quarter to half dense, so the build grows faster than the grid: the
-/// hung checker at 24^3 / 32^3 / 40^3 hexes in 36 / 104 / 371 s with a 2.7 / 7.1 / 14.8 GB peak;
+/// hung checker at 24^3 / 32^3 / 40^3 hexes in 34 / 104 / 365 s with a 2.5 / 7.1 / 13.5 GB peak;
 /// at 48^3 (352,947 DOFs) A^2's factor (15.7 GB) does not fit beside the rest on 24 GB.
 Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
                                bool cell_parts);
