@@ -69,22 +69,7 @@ std::pair<double, double> factorize_and_solve(const cg::SparseMatrix& A, const c
     return {median(factorize), median(solve)};
 }
 
-/// Peak resident memory of the process in MB (VmHWM), 0 if unknown.
-double peak_mb() {
-    std::ifstream status("/proc/self/status");
-    std::string key;
-    while (status >> key) {
-        if (key == "VmHWM:") {
-            double kb = 0;
-            status >> kb;
-            return kb / 1e3;
-        }
-        status.ignore(1 << 20, '\n');
-    }
-    return 0;
-}
-
-/// Starts a new high-water mark for peak_mb (Linux: 5 > /proc/self/clear_refs).
+/// Starts a new high-water mark for cg::peak_resident_mb (Linux: 5 > /proc/self/clear_refs).
 void reset_peak() { std::ofstream("/proc/self/clear_refs") << "5"; }
 
 /// The fine problem: the checker bench problem or a scene file with the given grid cells.
@@ -148,7 +133,7 @@ int run(int argc, char** argv) {
     const cg::test::GridProblem p = make_problem(cells, scene);
     std::printf("%s grid %dx%dx%d: %ld nodes, %ld DOFs; problem set up in %.2f s, peak %.0f MB\n",
                 scene.c_str(), cells[0], cells[1], cells[2], static_cast<long>(p.mesh.num_nodes()),
-                static_cast<long>(p.mesh.num_dofs()), since(t0), peak_mb());
+                static_cast<long>(p.mesh.num_dofs()), since(t0), cg::peak_resident_mb());
     std::printf(
         "levels %d, %s refinement, radius %s (%s rings), patch %d%s, truncation %g, invariance "
         "%d, localization %s, relaxation %g\n",
@@ -194,7 +179,7 @@ int run(int argc, char** argv) {
     std::printf(
         "build %.2f s, storage %.1f MB (adapted %.1f MB, W and C^+ %.1f MB), peak %.0f MB\n", build,
         static_cast<double>(bytes + canonical) / 1e6, static_cast<double>(bytes) / 1e6,
-        static_cast<double>(canonical) / 1e6, peak_mb());
+        static_cast<double>(canonical) / 1e6, cg::peak_resident_mb());
     for (const auto& [phase, s] : h.timings.entries())
         std::printf("  %-40s %8.3f s\n", phase.c_str(), s);
     std::fflush(stdout);

@@ -709,11 +709,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             L.region_rings = std::move(lz.rings);
         }
         R = SparseMatrix();
-        if (!relaxed && options.store_wavelet_stiffness) {
-            L.B = SparseMatrix(L.B.triangularView<Eigen::Lower>());
+        if (!relaxed) {  // a relaxed step made B^k as it is kept
+            L.B = options.store_wavelet_stiffness ? SparseMatrix(L.B.triangularView<Eigen::Lower>())
+                                                  : SparseMatrix();
             L.B.makeCompressed();
-        } else if (!relaxed) {
-            L.B = SparseMatrix();
         }
 
         // Coarse nodes on the Dirichlet boundary: at the position of a fixed finest node (their
