@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <numeric>
 #include <utility>
 
 #include "coarsegrain/common/error.hpp"
@@ -93,6 +94,7 @@ struct RegionScratch {
     std::vector<double> work;
     std::vector<Index> fine_position;  ///< adapted_rows' positions, sized on first use
     std::vector<char> mark;            ///< nodes_within's marks on level meshes, sized on first use
+    std::vector<Index> measurement;    ///< solve_penalized_region's -1 map, sized on first use
     std::vector<solve::SpdSolver> solvers;
     std::vector<std::vector<LocalOrder>> orders;
     std::vector<std::size_t> next_order;
@@ -863,6 +865,79 @@ class CellSum {
     SparseMatrix X_;
 };
 
+/// The operator of cell-wise localized solves: A (both triangles), plus penalty G^T G if G is
+/// given (G: measurements by A's unknowns, compressed), whose principal blocks are formed region
+/// by region (solve_operator_region), never whole. The relaxed coarser steps need that: their G
+/// measures the fine functions of level k+1, reaching about 7 of its nodes from a coarse node, so
+/// G^T G over a whole level is denser than A^{k+1} (the 24^3 checker's coarse step: 43M
+/// entries against A's 27M; at 40^3 the whole sum did not fit in 21 GB).
+struct RegionOperator {
+    const SparseMatrix& A;
+    const SparseMatrix* G = nullptr;
+    double penalty = 0;
+};
+
+/// Solves (A[S, S] + penalty G[:, S]^T G[:, S]) x = rhs (rhs in S's order; local[u]: the position
+/// of unknown u in S, or -1) with the calling thread's scratch. G[:, S] is gathered over the rows
+/// it touches; the block is formed densely and its Gram part by BLAS dsyrk when it is small or
+/// A[S, S] or G[:, S] is dense (solve_region's bounds, at any size: a sparse product of dense
+/// blocks costs more than the dense factorization), else sparse and solved by solve_region.
+Matrix solve_penalized_region(const RegionOperator& op, const std::vector<Index>& S,
+                              const std::vector<Index>& local, const Matrix& rhs, int dim,
+                              RegionScratch& scratch) {
+    const SparseMatrix& G = *op.G;
+    const Index ns = static_cast<Index>(S.size());
+    std::vector<Index>& position = scratch.measurement;
+    if (position.empty()) position.assign(static_cast<std::size_t>(G.rows()), -1);
+    std::vector<Index> rows;
+    std::vector<Eigen::Triplet<double, Index>> g;
+    for (Index s = 0; s < ns; ++s)
+        for (SparseMatrix::InnerIterator it(G, S[static_cast<std::size_t>(s)]); it; ++it) {
+            Index& p = position[static_cast<std::size_t>(it.row())];
+            if (p < 0) {
+                p = static_cast<Index>(rows.size());
+                rows.push_back(it.row());
+            }
+            g.emplace_back(p, s, it.value());
+        }
+    for (const Index r : rows) position[static_cast<std::size_t>(r)] = -1;
+    const Index nr = static_cast<Index>(rows.size());
+    const Index nnz = block_pattern(op.A, S, local).first;
+    const double n = static_cast<double>(ns);
+    const bool dense =
+        ns <= kDenseLocalLimit || static_cast<double>(nnz) > kDenseLocalDensity * n * n ||
+        static_cast<double>(g.size()) > kDenseLocalDensity * n * static_cast<double>(nr);
+    if (dense) {
+        Matrix m = Matrix::Zero(ns, ns);
+        for (Index c = 0; c < ns; ++c)
+            for (SparseMatrix::InnerIterator it(op.A, S[static_cast<std::size_t>(c)]); it; ++it)
+                if (const Index r = local[static_cast<std::size_t>(it.row())]; r >= 0)
+                    m(r, c) = it.value();
+        Matrix gs = Matrix::Zero(nr, ns);
+        for (const auto& t : g) gs(t.row(), t.col()) = t.value();
+        solve::syrk_lower(gs, op.penalty, m);
+        solve::DenseCholesky llt;
+        CG_VERIFY(llt.compute(std::move(m)) == 0,
+                  "mra: a local penalized system (n = {}) is not positive definite", ns);
+        return llt.solve(rhs);
+    }
+    principal_block(op.A, S, local, nnz, nullptr, scratch.b);
+    SparseMatrix gs(nr, ns);
+    gs.setFromTriplets(g.begin(), g.end());
+    const SparseMatrix m = scratch.b + op.penalty * SparseMatrix(SparseMatrix(gs.transpose()) * gs);
+    std::vector<Index> all(static_cast<std::size_t>(ns));
+    std::iota(all.begin(), all.end(), Index{0});
+    return solve_region(m, all, all, rhs, dim, scratch, 0, true);
+}
+
+/// Solves op[S, S] x = rhs: by solve_region without G, else by solve_penalized_region.
+Matrix solve_operator_region(const RegionOperator& op, const std::vector<Index>& S,
+                             const std::vector<Index>& local, const Matrix& rhs, int dim,
+                             RegionScratch& scratch) {
+    return op.G ? solve_penalized_region(op, S, local, rhs, dim, scratch)
+                : solve_region(op.A, S, local, rhs, dim, scratch, 0, true);
+}
+
 /// start + sum_T X^T with X^T[:, S_T] = -x^T and op[S_T, S_T] x = F[S_T, T] A_T G[:, T]^T: the
 /// cell-wise localized solves of both constructions (G the start rows over the present fine DOFs:
 /// C^† Φ or C Φ; `start` #rows of G by `unknowns`, or empty for none). `op` is symmetric (both
@@ -871,7 +946,7 @@ class CellSum {
 /// factorization per distinct box, boxes in parallel (OpenMP); parts whose boxes coincide share
 /// it, and their right-hand sides of one row are summed (the solve is linear), so a box solves as
 /// many columns as rows touch its parts.
-SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxUnknowns& in_box,
+SparseMatrix cell_corrections(const RegionOperator& op, Index unknowns, const BoxUnknowns& in_box,
                               const SparseMatrix& F, const SparseMatrix& G,
                               const SparseMatrix& start, const std::vector<CellStiffness>& parts,
                               const StepGeometry& g, int rings) {
@@ -959,7 +1034,7 @@ SparseMatrix cell_corrections(const SparseMatrix& op, Index unknowns, const BoxU
             rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
             if (ns > 0 && !rows.empty()) {
                 const Matrix rhs = parts_rhs(group, local, rows, ns);
-                const Matrix x = solve_region(op, S, local, rhs, g.dim, scratch, 0, true);
+                const Matrix x = solve_operator_region(op, S, local, rhs, g.dim, scratch);
                 X.subtract(
                     x, Eigen::Map<const IndexVector>(rows.data(), static_cast<Index>(rows.size())),
                     S);
@@ -1009,8 +1084,8 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
                                      std::vector<Index>& local, std::vector<Index>& S) {
         box_wavelets(W, fine_local, nf, g.dim, lo, hi, local, S);
     };
-    return cell_corrections(B, static_cast<Index>(W.rows()), wavelets, WPhi, CdPhi, SparseMatrix(),
-                            parts, g, rings);
+    return cell_corrections({B}, static_cast<Index>(W.rows()), wavelets, WPhi, CdPhi,
+                            SparseMatrix(), parts, g, rings);
 }
 
 bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, const StepGeometry& g) {
@@ -1098,8 +1173,22 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     // the parts' fine elements costs more than the step).
     if (regions_span_level(parts, rings, g)) return whole_level_refinement(A, G, penalty);
     CG_ASSERT(Phi.rows() == A.rows(), "mra: relaxed step without its fine functions");
-    return cell_corrections(penalized(A, G, penalty), static_cast<Index>(A.rows()), interior, Phi,
-                            product(C, Phi), C, parts, g, rings);
+    // The sum A + penalty G^T G formed whole where it stays within a few times A's size (its
+    // product's work, sum_r nnz(G[r, :])^2, a bound on G^T G's entries, at most 4 times A's: the
+    // finest step, where G = C^{q-1}, 1.2x on the 24^3 checker), else region by region (its
+    // coarse step: 260x).
+    std::vector<double> row_entries(static_cast<std::size_t>(G.rows()), 0.0);
+    for (Index j = 0; j < G.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(G, j); it; ++it)
+            ++row_entries[static_cast<std::size_t>(it.row())];
+    const double gram_work =
+        std::inner_product(row_entries.begin(), row_entries.end(), row_entries.begin(), 0.0);
+    const Index unknowns = static_cast<Index>(A.rows());
+    const SparseMatrix CPhi = product(C, Phi);
+    if (gram_work <= 4.0 * static_cast<double>(A.nonZeros()))
+        return cell_corrections({penalized(A, G, penalty)}, unknowns, interior, Phi, CPhi, C, parts,
+                                g, rings);
+    return cell_corrections({A, &G, penalty}, unknowns, interior, Phi, CPhi, C, parts, g, rings);
 }
 
 SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,

@@ -32,6 +32,9 @@ void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* inf
 void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
             const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,
             const double* beta, double* c, const int* ldc, std::size_t, std::size_t);
+void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
+            const double* a, const int* lda, const double* beta, double* c, const int* ldc,
+            std::size_t, std::size_t);
 }
 
 namespace coarsegrain::solve {
@@ -415,6 +418,15 @@ void match_blas_threads(bool serial) {
     if (set) set(serial || omp_in_parallel() ? 1 : omp_get_max_threads());
 }
 
+namespace {
+
+int blas_int(Eigen::Index v) {
+    CG_VERIFY(v <= std::numeric_limits<int>::max(), "BLAS: dimension {} exceeds BLAS's int", v);
+    return static_cast<int>(v);
+}
+
+}  // namespace
+
 void gemm(const Eigen::Ref<const Matrix>& A, bool transpose_a, const Eigen::Ref<const Matrix>& B,
           bool transpose_b, double beta, Eigen::Ref<Matrix> C) {
     using Eigen::Index;  // dense sizes are ptrdiff_t; BLAS takes int
@@ -430,10 +442,6 @@ void gemm(const Eigen::Ref<const Matrix>& A, bool transpose_a, const Eigen::Ref<
             C *= beta;
         return;
     }
-    const auto blas_int = [](Index v) {
-        CG_VERIFY(v <= std::numeric_limits<int>::max(), "gemm: dimension {} exceeds BLAS's int", v);
-        return static_cast<int>(v);
-    };
     const int mi = blas_int(m), ni = blas_int(n), ki = blas_int(k);
     const int lda = blas_int(A.outerStride()), ldb = blas_int(B.outerStride()),
               ldc = blas_int(C.outerStride());
@@ -441,6 +449,17 @@ void gemm(const Eigen::Ref<const Matrix>& A, bool transpose_a, const Eigen::Ref<
     match_blas_threads();
     dgemm_(transpose_a ? "T" : "N", transpose_b ? "T" : "N", &mi, &ni, &ki, &one, A.data(), &lda,
            B.data(), &ldb, &beta, C.data(), &ldc, 1, 1);
+}
+
+void syrk_lower(const Eigen::Ref<const Matrix>& A, double alpha, Eigen::Ref<Matrix> C) {
+    CG_VERIFY(C.rows() == A.cols() && C.cols() == A.cols(), "syrk: {}x{} Gram matrix into {}x{}",
+              A.cols(), A.cols(), C.rows(), C.cols());
+    if (A.cols() == 0 || A.rows() == 0) return;
+    const int n = blas_int(A.cols()), k = blas_int(A.rows());
+    const int lda = blas_int(A.outerStride()), ldc = blas_int(C.outerStride());
+    const double one = 1.0;
+    match_blas_threads();
+    dsyrk_("L", "T", &n, &k, &alpha, A.data(), &lda, &one, C.data(), &ldc, 1, 1);
 }
 
 std::vector<Index> column_groups(const SparseMatrix& A, int max_size) {

@@ -765,5 +765,26 @@ TEST(Gemm, IsEigensProductOnBlocksWithAndWithoutTransposes) {
     test::expect_error([&] { gemm(A, false, A, false, 0.0, out); }, "gemm: 9x7 times 9x7 into 8x5");
 }
 
+// BLAS dsyrk against Eigen's A^T A: the lower triangle gets alpha A^T A added, the strict upper
+// triangle is left as it was (DenseCholesky reads the lower one), on a block with an outer
+// stride; 1e-14 relative, the same sums in another order.
+TEST(SyrkLower, AddsTheGramMatrixToTheLowerTriangleOnly) {
+    const Matrix A = Matrix::Random(9, 6);
+    Matrix big = Matrix::Random(10, 8);
+    const Matrix before = big;
+    syrk_lower(A, 2.5, big.block(3, 1, 6, 6));
+    const Matrix expected = before.block(3, 1, 6, 6) + 2.5 * A.transpose() * A;
+    const Matrix got = big.block(3, 1, 6, 6);
+    for (Index j = 0; j < 6; ++j)
+        for (Index i = 0; i < 6; ++i)
+            EXPECT_NEAR(got(i, j), i >= j ? expected(i, j) : before(3 + i, 1 + j),
+                        1e-14 * expected.norm())
+                << i << ", " << j;
+    big.block(3, 1, 6, 6) = before.block(3, 1, 6, 6);
+    EXPECT_EQ(big, before);  // nothing written outside the block
+    Matrix out(5, 5);
+    test::expect_error([&] { syrk_lower(A, 1.0, out); }, "syrk: 6x6 Gram matrix into 5x5");
+}
+
 }  // namespace
 }  // namespace coarsegrain::solve

@@ -124,6 +124,11 @@ void match_blas_threads(bool serial = false);
 void gemm(const Eigen::Ref<const Matrix>& A, bool transpose_a, const Eigen::Ref<const Matrix>& B,
           bool transpose_b, double beta, Eigen::Ref<Matrix> C);
 
+/// C's lower triangle += alpha A^T A by BLAS dsyrk (A k by n, C n by n; the strict upper triangle
+/// is not touched), with match_blas_threads: half dgemm's flops for a Gram matrix.
+/// @throws Error if the sizes do not match or exceed BLAS's int
+void syrk_lower(const Eigen::Ref<const Matrix>& A, double alpha, Eigen::Ref<Matrix> C);
+
 /// Offsets of A's column groups (size #groups + 1; A compressed): maximal runs of at most
 /// `max_size` consecutive columns with identical row patterns. In an interleaved FEM matrix these
 /// are the nodes (a node with components eliminated by Dirichlet conditions gives a shorter run).
