@@ -219,8 +219,14 @@ Options automatic_construction(Options options, const Eigen::Vector3i& cells, in
     // Levels out of range are left to validate's message.
     if (!options.radius.empty() || options.levels < 2 || options.levels > kMaxLevels)
         return options;
-    Index dofs = dim;  // of the fine grid
-    for (int d = 0; d < dim; ++d) dofs *= cells[d] + 1;
+    // DOFs of level k of q = options.levels (the fine grid: k = q), whose cells are halved q - k
+    // times.
+    const auto dofs_of = [&](int k) {
+        Index dofs = dim;
+        for (int d = 0; d < dim; ++d) dofs *= (cells[d] >> (options.levels - k)) + 1;
+        return dofs;
+    };
+    const Index dofs = dofs_of(options.levels);
     const Options defaults;
     const bool localization_given =
         options.localization != defaults.localization || options.patch != defaults.patch ||
@@ -240,8 +246,11 @@ Options automatic_construction(Options options, const Eigen::Vector3i& cells, in
     options.patch = kLocalizedPatch;
     options.relaxation = kLocalizedRelaxation;
     // Step k (radius[k - 1]) builds level k from level k + 1: the finest one (k = q - 1) in
-    // rings, the coarser ones on their whole level.
-    options.radius.assign(static_cast<std::size_t>(options.levels - 1), global);
+    // rings, the coarser ones on their whole level where it is small, else in rings.
+    options.radius.resize(static_cast<std::size_t>(options.levels - 1));
+    for (int k = 1; k < options.levels - 1; ++k)
+        options.radius[static_cast<std::size_t>(k - 1)] =
+            dofs_of(k + 1) <= kWholeLevelMaxDofs ? global : kLocalizedCoarseRings;
     options.radius.back() = kLocalizedFineRings;
     return options;
 }
@@ -814,6 +823,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             const Phase phase(tag + "A", &h.timings);
             L.A = detail::congruence(Ct, A, dof_groups(h, L));
         }
+        // A^{k+1}'s copy with both triangles is read no more: freed before C̃^{q-1} may be
+        // stored as runs below, beside its sparse form (48^3 checker, 3 levels, coarse step in
+        // rings: the build's peak 23.5 GB there).
+        A_full = SparseMatrix();
         if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);
             L.Psi = product(L.W, Phi);
@@ -836,7 +849,6 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         Ct = SparseMatrix();
         L.build_seconds = seconds_since(t0);
         if (k > 1) {
-            A_full = SparseMatrix();  // A^{k+1}: no longer needed
             A_full = symmetric_from_lower(L.A);
             A_next = &A_full;
         }

@@ -27,8 +27,9 @@
 /// half a length unit each way and across the section) it beats the global error in less time
 /// (64x16x16: 0.23x in 0.44x, C̃ 0.6x as dense); with 5 fine rings it is 0.78x at 64x16x16 and 1.48x
 /// at 80x20x20 with C̃ 0.28-0.30x as dense, in a quarter of the build and half the memory or less
-/// (48x12x12 needs 6 rings). That setting with 6 fine rings is the automatic construction above 40K
-/// DOFs in 3D (automatic_construction). docs/mra-localization.md has the measurements behind each
+/// (48x12x12 needs 6 rings). That setting with 6 fine rings, and coarser steps in 3 rings on levels
+/// of more than 20K DOFs, is the automatic construction above 40K DOFs in 3D
+/// (automatic_construction). docs/mra-localization.md has the measurements behind each
 /// option (accuracy, build time, storage) and the commands that regenerate them.
 #include <limits>
 #include <string>

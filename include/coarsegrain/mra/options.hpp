@@ -198,11 +198,15 @@ struct Options {
 inline constexpr int kMaxLevels = 17;
 
 /// The automatic construction's localized setting (automatic_construction): fine DOFs above
-/// which a 3D grid takes it, its patch, relaxation gamma and the rings of its finest step.
+/// which a 3D grid takes it, its patch, relaxation gamma, the rings of its finest step, and the
+/// DOFs of level k+1 up to which a coarser step is taken on its whole level, and the rings of
+/// those above.
 inline constexpr Index kLocalizedMinDofs = 40000;
 inline constexpr int kLocalizedPatch = 2;
 inline constexpr double kLocalizedRelaxation = 3;
 inline constexpr double kLocalizedFineRings = 6;
+inline constexpr Index kWholeLevelMaxDofs = 20000;
+inline constexpr double kLocalizedCoarseRings = 3;
 
 /// The options an empty Options::radius (automatic) stands for, on a grid of `cells` cells per
 /// axis (the first dim entries; DOFs: dim per node, Dirichlet ones included); `cell_parts`: the
@@ -214,8 +218,9 @@ inline constexpr double kLocalizedFineRings = 6;
 /// refinement, canonical measurements, the stiffness operator and the eliminate, constrain or
 /// ignore treatment, gets the accurate localized construction: cell localization, patch
 /// kLocalizedPatch, relaxation kLocalizedRelaxation, kLocalizedFineRings rings at the finest
-/// step and every coarser step on its whole level (infinite radius). Every other model gets
-/// global solves (infinite radius at every step).
+/// step, and every coarser step on its whole level (infinite radius) up to kWholeLevelMaxDofs
+/// DOFs of level k+1, in kLocalizedCoarseRings rings above. Every other model gets global solves
+/// (infinite radius at every step).
 ///
 /// Measured against global solves (3 levels; docs/mra-localization.md, "The automatic
 /// construction"): 0.40x, 0.63x the coarsest energy error on the accordion beam at 64x16x16 and
@@ -223,13 +228,12 @@ inline constexpr double kLocalizedFineRings = 6;
 /// 1.03x and 1.10x on 216 stiff spheres and touching cubes at 24^3; C̃ 0.32-0.48x as dense, in
 /// 0.29-0.61x the build time and 0.30-0.54x the peak memory. Below about 40K DOFs the regions of
 /// 6 rings span most of the grid and global solves take seconds; in 2D global solves fill in
-/// little; the Dirac refinement's relaxed basis does not localize (validate). A coarser step in
-/// rings is less accurate, slower and larger than on its whole level, whose finer functions
-/// already reach about 7 of its nodes (hung checker at 32^3: 3 rings 0.2716 against 0.2597, 59 s
-/// against 31 s, peak 12.4 against 9.1 GB; at 40^3 6 rings ran out of memory). The whole-level
-/// step factorizes A^{k+1}, a quarter to half dense, so the build grows faster than the grid: the
-/// hung checker at 24^3 / 32^3 / 40^3 hexes in 34 / 104 / 365 s with a 2.5 / 7.1 / 13.5 GB peak;
-/// at 48^3 (352,947 DOFs) A^2's factor (15.7 GB) does not fit beside the rest on 24 GB.
+/// little; the Dirac refinement's relaxed basis does not localize (validate). A coarser step
+/// factorizes A^{k+1} on its whole level, a quarter to half dense, so it grows with the square of
+/// the level; in rings its regions' blocks are dense, but their number grows linearly. Hung
+/// checker, 3 levels, whole level against 3 rings: at 32^3 (14,739 DOFs on level 2) 104 against
+/// 114 s, 0.2597 against 0.2716; at 40^3 (27,783) 365 against 255 s, 0.2355 against 0.2475; at
+/// 48^3 (46,875) the whole level's factor does not fit in 24 GB, 3 rings build in 500 s.
 Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
                                bool cell_parts);
 
