@@ -579,6 +579,12 @@ TEST(DenseCholesky, SolvesAndReportsTheFailingMinor) {
     EXPECT_EQ(llt.compute(D), 0);
     const Matrix x = D.llt().solve(B);
     EXPECT_LT((llt.solve(B) - x).norm(), 1e-12 * x.norm());
+    Matrix in_place = B;
+    llt.solve_in_place(in_place);
+    EXPECT_LT((in_place - x).norm(), 1e-12 * x.norm());
+    Matrix none(n, 0);
+    EXPECT_NO_THROW(llt.solve_in_place(none));
+    EXPECT_THROW(llt.solve(random_matrix(n + 1, 2, 31)), Error);
     Matrix indefinite = D;
     indefinite(6, 6) = -1.0;  // the leading minor of order 7 has a negative pivot
     EXPECT_EQ(llt.compute(indefinite), 7);
