@@ -1175,7 +1175,7 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     CG_ASSERT(Phi.rows() == A.rows(), "mra: relaxed step without its fine functions");
     // The sum A + penalty G^T G formed whole where it stays within a few times A's size (its
     // product's work, sum_r nnz(G[r, :])^2, a bound on G^T G's entries, at most 4 times A's: the
-    // finest step, where G = C^{q-1}, 1.2x on the 24^3 checker), else region by region (its
+    // finest step, where G = C^{q-1}, about 1.4x on the 24^3 checker), else region by region (its
     // coarse step: 260x).
     std::vector<double> row_entries(static_cast<std::size_t>(G.rows()), 0.0);
     for (Index j = 0; j < G.outerSize(); ++j)

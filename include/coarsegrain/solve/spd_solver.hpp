@@ -97,7 +97,7 @@ class DenseCholesky {
     /// leading minor that is not positive definite (LAPACK's info; solve then throws).
     /// @throws Error if A is not square
     Index compute(Matrix A);
-    /// Solves A x = b (n by k).
+    /// Solves A x = b (n by k) by LAPACK dpotrs.
     /// @throws Error without a successful compute, or on a size mismatch
     Matrix solve(const Matrix& b) const;
     /// b <- A^{-1} b, without a copy of b.
