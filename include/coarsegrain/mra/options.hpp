@@ -232,8 +232,8 @@ inline constexpr double kLocalizedCoarseRings = 3;
 /// factorizes A^{k+1} on its whole level, a quarter to half dense, so it grows with the square of
 /// the level; in rings its regions' blocks are dense, but their number grows linearly. Hung
 /// checker, 3 levels, whole level against 3 rings: at 32^3 (14,739 DOFs on level 2) 104 against
-/// 114 s, 0.2597 against 0.2716; at 40^3 (27,783) 365 against 255 s, 0.2355 against 0.2475; at
-/// 48^3 (46,875) the whole level's factor does not fit in 24 GB, 3 rings build in 500 s.
+/// 115 s, 0.2597 against 0.2716; at 40^3 (27,783) 305 against 257 s, 0.2355 against 0.2475; at
+/// 48^3 (46,875) the whole level's factor does not fit in 24 GB, 3 rings build in 451 s.
 Options automatic_construction(Options options, const Eigen::Vector3i& cells, int dim,
                                bool cell_parts);
 
