@@ -552,9 +552,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         const double ratio = spacing_of(k) / spacing_of(k + 1);
         return static_cast<int>(std::min(std::round(rings * ratio), 1e6));
     };
-    // A^{k+1} with both triangles, as the products take it: the fine operator, then a transient
-    // copy of the level above (Level::A keeps the lower triangle).
-    const SparseMatrix* A_next = K ? &h.A_fine : A_free;
+    // A^{k+1} with both triangles, as the products take it: the fine operator, then the level
+    // above, held only so while its step runs (Level::A keeps the lower triangle).
+    const SparseMatrix* const fine_operator = K ? &h.A_fine : A_free;
+    const SparseMatrix* A_next = fine_operator;
     SparseMatrix A_full;
     bool runs_pending = false;  // C̃^{q-1} is still Phi_present, not yet L.C_adapted
     const auto store_pending_runs = [&] {
@@ -642,11 +643,9 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         SparseMatrix R;
         {
             const Phase phase(tag + "B", &h.timings);
-            // The relaxed cell-wise solves do not read B^k, which is then made as it is kept,
-            // its lower triangle; the other solves read it whole.
-            if (relaxed && options.store_wavelet_stiffness)
-                L.B = detail::congruence(L.W, A, detail::consecutive_groups(L.W.rows(), 8 * dim));
-            else if (!relaxed)
+            // The other solves read B^k whole; the relaxed cell-wise solves do not read it (it is
+            // made after the step, below).
+            if (!relaxed)
                 L.B = detail::symmetrized(
                     detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
             if (!step_by_cell)
@@ -823,10 +822,14 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             const Phase phase(tag + "A", &h.timings);
             L.A = detail::congruence(Ct, A, dof_groups(h, L));
         }
-        // A^{k+1}'s copy with both triangles is read no more: freed before C̃^{q-1} may be
-        // stored as runs below, beside its sparse form (48^3 checker, 3 levels, coarse step in
-        // rings: the build's peak 23.5 GB there).
-        A_full = SparseMatrix();
+        // A^{k+1} (not the fine operator) is kept as its lower triangle from here on, and its
+        // copy with both triangles freed before C̃^{q-1} may be stored as runs below, beside
+        // its sparse form (48^3 checker, 3 levels, coarse step in rings: the build's peak 23.5
+        // GB there).
+        if (k + 1 < q) {
+            h.levels[static_cast<std::size_t>(k)].A = A_full.triangularView<Eigen::Lower>();
+            A_full = SparseMatrix();
+        }
         if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);
             L.Psi = product(L.W, Phi);
@@ -847,9 +850,23 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             Phi_present = std::move(Phi_next);
         }
         Ct = SparseMatrix();
+        if (relaxed && options.store_wavelet_stiffness) {
+            // B^k, made as it is kept (its lower triangle) after the step's solves, through which
+            // it was held, and after C̃^{q-1} is stored as runs (the 56^3 checker, 3 levels, 4
+            // fine rings: the coarse step's peak 17.5 -> 12.6 GB, the build's 18.0 -> 17.0).
+            const Phase phase(tag + "B", &h.timings);
+            const SparseMatrix A_above =
+                k + 1 < q ? symmetric_from_lower(h.levels[static_cast<std::size_t>(k)].A)
+                          : SparseMatrix();
+            L.B = detail::congruence(L.W, k + 1 < q ? A_above : *fine_operator,
+                                     detail::consecutive_groups(L.W.rows(), 8 * dim));
+        }
         L.build_seconds = seconds_since(t0);
+        // A^k with both triangles, as the next step's products take it, alone: its lower
+        // triangle is stored back after the step's Galerkin product.
         if (k > 1) {
             A_full = symmetric_from_lower(L.A);
+            L.A = SparseMatrix();
             A_next = &A_full;
         }
         dofs_next = L.dofs;

@@ -1,8 +1,14 @@
 #include "products.hpp"
 
+#include <omp.h>
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <array>
 #include <map>
+#include <memory>
+#include <new>
+#include <numeric>
 
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/mra/refinement.hpp"
@@ -188,6 +194,13 @@ constexpr double kDenseCongruenceMaxEntries = 6e8;
 /// density against 1.14-1.17 s by dgemm, X's dense copy included).
 constexpr double kSparseDensePenalty = 20;
 
+/// The grouped congruence of an M at most this fraction dense reads M's rows through
+/// kCongruenceBands transposed bands, not one transposed copy. A group's rows beyond its band
+/// are then read by M's columns, which a sparse M's groups do anyway but the last few (see
+/// by_rows); denser ones read most rows by rows.
+constexpr double kBandedCongruence = 0.05;
+constexpr int kCongruenceBands = 16;
+
 /// Columns per block of the lower triangle's dense product.
 constexpr Index kLowerBlock = 512;
 
@@ -356,15 +369,103 @@ void accumulate(const SparseMatrix& S, const ColumnRuns& runs, const RowAccumula
     }
 }
 
-/// acc[i, :] = sum_f St[f, i] rows[f, :] over the keys f of `rows`, for every column i >=
-/// first_row of St (a row of S = St^T) that meets a key: row by row, each kept in registers.
+/// A sparse matrix's columns, written by OpenMP threads in any order, each thread into blocks of
+/// its own, then moved into one compressed matrix a block at a time, each block unmapped once
+/// copied. A block is a mapping of its own, resident only as it is written and returned to the
+/// system when freed, even where the allocator keeps freed memory (retain_freed_memory), and
+/// the matrix's arrays are resident only as they are filled: the result is held about once
+/// while it is assembled. Columns kept as vectors, copied into the matrix and freed are held
+/// twice (the 64^3 checker's A^2: 2.4 GB more at the build's peak).
+class ColumnStore {
+  public:
+    ColumnStore(Index rows, Index cols, int threads)
+        : rows_(rows),
+          pieces_(static_cast<std::size_t>(cols)),
+          blocks_(static_cast<std::size_t>(threads)) {}
+
+    /// Starts column j in thread t with room for `capacity` entries (push them with push).
+    void begin(int t, Index j, Index capacity) {
+        auto& blocks = blocks_[static_cast<std::size_t>(t)];
+        const auto needed = static_cast<std::size_t>(capacity);
+        if (blocks.empty() || blocks.back()->size + needed > blocks.back()->capacity)
+            blocks.push_back(std::make_unique<Block>(std::max(kBlockEntries, needed)));
+        Block& b = *blocks.back();
+        pieces_[static_cast<std::size_t>(j)] = {static_cast<Index>(b.size), 0};
+        b.columns.push_back(j);
+    }
+    /// Appends (row, value) to column j, begun last in thread t, rows ascending.
+    void push(int t, Index j, Index row, double value) {
+        Block& b = *blocks_[static_cast<std::size_t>(t)].back();
+        b.rows[b.size] = row;
+        b.values[b.size++] = value;
+        ++pieces_[static_cast<std::size_t>(j)].count;
+    }
+    /// The rows x cols matrix of the columns written (a column not begun is empty); empties the
+    /// store.
+    SparseMatrix take() {
+        const auto cols = static_cast<Index>(pieces_.size());
+        SparseMatrix S(rows_, cols);
+        Index* outer = S.outerIndexPtr();
+        outer[0] = 0;
+        for (Index j = 0; j < cols; ++j)
+            outer[j + 1] = outer[j] + pieces_[static_cast<std::size_t>(j)].count;
+        S.resizeNonZeros(outer[cols]);
+        for (auto& blocks : blocks_)
+            for (auto& b : blocks) {
+                for (const Index j : b->columns) {
+                    const Piece& p = pieces_[static_cast<std::size_t>(j)];
+                    std::copy_n(b->rows + p.offset, p.count, S.innerIndexPtr() + outer[j]);
+                    std::copy_n(b->values + p.offset, p.count, S.valuePtr() + outer[j]);
+                }
+                b.reset();
+            }
+        blocks_.clear();
+        pieces_.clear();
+        return S;
+    }
+
+  private:
+    /// Entries per block (96 MB).
+    static constexpr std::size_t kBlockEntries = std::size_t{1} << 23;
+    /// `capacity` entries in one anonymous mapping: the values, then their rows.
+    struct Block {
+        std::size_t capacity, size = 0;
+        void* mapping;
+        double* values;
+        Index* rows;
+        std::vector<Index> columns;  // begun here, in order
+
+        explicit Block(std::size_t entries)
+            : capacity(entries),
+              mapping(mmap(nullptr, bytes(), PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
+                           -1, 0)) {
+            if (mapping == MAP_FAILED) throw std::bad_alloc();
+            values = static_cast<double*>(mapping);
+            rows = reinterpret_cast<Index*>(values + capacity);
+        }
+        ~Block() { munmap(mapping, bytes()); }
+        Block(const Block&) = delete;
+        Block& operator=(const Block&) = delete;
+        std::size_t bytes() const { return capacity * (sizeof(double) + sizeof(Index)); }
+    };
+    struct Piece {
+        Index offset, count;
+    };
+    Index rows_;
+    std::vector<Piece> pieces_;
+    std::vector<std::vector<std::unique_ptr<Block>>> blocks_;  // per thread
+};
+
+/// acc[i, :] = sum_f M[i, f] rows[f, :] over the keys f of `rows`, for every row i of M in
+/// [first_row, band.last) that meets a key, from Mt = M[band.first : band.last, :]^T: row by
+/// row, each kept in registers.
 template <int W>
-void accumulate_rows(const SparseMatrix& St, const RowAccumulator<W>& rows, RowAccumulator<W>& acc,
-                     Index first_row) {
-    const Index* outer = St.outerIndexPtr();
-    const Index* inner = St.innerIndexPtr();
-    const double* value = St.valuePtr();
-    for (Index i = first_row; i < St.outerSize(); ++i) {
+void accumulate_rows(const SparseMatrix& Mt, Index band_first, const RowAccumulator<W>& rows,
+                     RowAccumulator<W>& acc, Index first_row) {
+    const Index* outer = Mt.outerIndexPtr();
+    const Index* inner = Mt.innerIndexPtr();
+    const double* value = Mt.valuePtr();
+    for (Index i = first_row - band_first; i < Mt.outerSize(); ++i) {
         double sum[W] = {};
         bool met = false;
         for (Index k = outer[i]; k < outer[i + 1]; ++k) {
@@ -374,94 +475,136 @@ void accumulate_rows(const SparseMatrix& St, const RowAccumulator<W>& rows, RowA
             for (int c = 0; c < W; ++c) sum[c] += v * p[c];
             met = true;
         }
-        if (met) std::copy(sum, sum + W, acc.row(i));
+        if (met) std::copy(sum, sum + W, acc.row(band_first + i));
     }
 }
 
-/// Whether M's rows from first_row on (accumulate_rows) are cheaper to scan for (M xmt)[first_row:,
-/// :] than M's columns at the keys of xmt (accumulate): when at least half of the rows' entries
-/// meet a key. Every entry met costs the same multiply-adds either way, but the columns add
-/// them to a row of the result in memory and the rows in registers.
+/// Rows [first, last) of M and the groups of rows congruence takes with them.
+struct RowBand {
+    Index first = 0, last = 0;
+    std::vector<Index> groups;
+};
+
+/// The groups in `bands` bands of M's rows, by their first rows: band b takes the groups whose
+/// first row is where the entries of M in the rows above it reach b / bands of all; each band's
+/// rows span its groups' rows. Empty bands are left out.
+std::vector<RowBand> row_bands(const SparseMatrix& M, const std::vector<IndexVector>& groups,
+                               int bands) {
+    std::vector<double> above(static_cast<std::size_t>(M.rows()) + 1, 0.0);
+    for (Index p = 0; p < M.nonZeros(); ++p)
+        ++above[static_cast<std::size_t>(M.innerIndexPtr()[p]) + 1];
+    std::partial_sum(above.begin(), above.end(), above.begin());
+    const double total = std::max(above.back(), 1.0);
+    std::vector<RowBand> out(static_cast<std::size_t>(bands));
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        const Index first = groups[g].minCoeff(), last = groups[g].maxCoeff() + 1;
+        const auto b = std::min<std::size_t>(
+            static_cast<std::size_t>(bands * above[static_cast<std::size_t>(first)] / total),
+            static_cast<std::size_t>(bands) - 1);
+        RowBand& band = out[b];
+        band.first = band.groups.empty() ? first : std::min(band.first, first);
+        band.last = band.groups.empty() ? last : std::max(band.last, last);
+        band.groups.push_back(static_cast<Index>(g));
+    }
+    std::erase_if(out, [](const RowBand& band) { return band.groups.empty(); });
+    return out;
+}
+
+/// M[first : last, :]^T: its column i - first is row i of M, with M's column indices ascending.
+SparseMatrix transposed_rows(const SparseMatrix& M, Index first, Index last) {
+    const Index n = M.cols();
+    const Index* outer = M.outerIndexPtr();
+    const Index* inner = M.innerIndexPtr();
+    std::vector<Index> begin(static_cast<std::size_t>(n));
+    SparseMatrix T(n, last - first);
+    Index* t_outer = T.outerIndexPtr();
+    std::fill(t_outer, t_outer + (last - first) + 1, 0);
+    for (Index f = 0; f < n; ++f) {
+        const Index* b = std::lower_bound(inner + outer[f], inner + outer[f + 1], first);
+        begin[static_cast<std::size_t>(f)] = static_cast<Index>(b - inner);
+        for (; b != inner + outer[f + 1] && *b < last; ++b) ++t_outer[*b - first + 1];
+    }
+    std::partial_sum(t_outer, t_outer + (last - first) + 1, t_outer);
+    T.resizeNonZeros(t_outer[last - first]);
+    std::vector<Index> next(t_outer, t_outer + (last - first));
+    for (Index f = 0; f < n; ++f)
+        for (Index p = begin[static_cast<std::size_t>(f)]; p < outer[f + 1] && inner[p] < last;
+             ++p) {
+            const Index q = next[static_cast<std::size_t>(inner[p] - first)]++;
+            T.innerIndexPtr()[q] = f;
+            T.valuePtr()[q] = M.valuePtr()[p];
+        }
+    return T;
+}
+
+/// Whether M's rows in [first, band.last) (accumulate_rows, from Mt = the band's rows
+/// transposed) are cheaper to scan for (M xmt)[first : band.last, :] than M's columns at the
+/// keys of xmt (accumulate): when at least half of the rows' entries meet a key. Every entry
+/// met costs the same multiply-adds either way, but the columns add them to a row of the result
+/// in memory and the rows in registers.
 template <int W>
-bool by_rows(const SparseMatrix& M, const SparseMatrix& Mt, RowAccumulator<W>& xmt, Index first) {
+bool by_rows(const SparseMatrix& M, const SparseMatrix& Mt, const RowBand& band,
+             const RowAccumulator<W>& xmt, Index first) {
     const Index* outer = M.outerIndexPtr();
     const Index* inner = M.innerIndexPtr();
     double met = 0;
-    for (const Index f : xmt.keys())
-        met += static_cast<double>(inner + outer[f + 1] -
-                                   std::lower_bound(inner + outer[f], inner + outer[f + 1], first));
+    for (const Index f : xmt.keys()) {
+        const Index* end = inner + outer[f + 1];
+        const Index* from = std::lower_bound(inner + outer[f], end, first);
+        met += static_cast<double>(std::lower_bound(from, end, band.last) - from);
+    }
+    const Index* t_outer = Mt.outerIndexPtr();
     const double scanned =
-        static_cast<double>(Mt.outerIndexPtr()[Mt.outerSize()] - Mt.outerIndexPtr()[first]);
+        static_cast<double>(t_outer[Mt.outerSize()] - t_outer[first - band.first]);
     return scanned <= 2 * met;
 }
 
-/// The lower triangular matrix whose column j has rows[j] (sorted, all >= j) and values[j].
-/// Built in place; empties rows and values column by column.
-SparseMatrix lower_from_columns(std::vector<std::vector<Index>>& rows,
-                                std::vector<std::vector<double>>& values) {
-    const Index m = static_cast<Index>(rows.size());
-    SparseMatrix S(m, m);
-    Index* outer = S.outerIndexPtr();
-    outer[0] = 0;
-    for (Index j = 0; j < m; ++j)
-        outer[j + 1] = outer[j] + static_cast<Index>(rows[static_cast<std::size_t>(j)].size());
-    S.resizeNonZeros(outer[m]);
-    for (Index j = 0; j < m; ++j) {
-        auto& r = rows[static_cast<std::size_t>(j)];
-        auto& v = values[static_cast<std::size_t>(j)];
-        std::copy(r.begin(), r.end(), S.innerIndexPtr() + outer[j]);
-        std::copy(v.begin(), v.end(), S.valuePtr() + outer[j]);
-        std::vector<Index>().swap(r);
-        std::vector<double>().swap(v);
-    }
-    return S;
-}
-
-/// The lower triangle of M X M^T (Mt = M^T), group by group of kernel width W (see
-/// congruence).
+/// The lower triangle of M X M^T, group by group of kernel width W, band by band of M's rows
+/// (see congruence).
 template <int W>
-SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& Mt,
-                                const SparseMatrix& X, const std::vector<IndexVector>& groups) {
+SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& X,
+                                const std::vector<IndexVector>& groups, int bands) {
     const Index m = M.rows(), n = M.cols();
     const ColumnRuns m_runs(M), x_runs(X);
-    std::vector<std::vector<Index>> rows(static_cast<std::size_t>(m));
-    std::vector<std::vector<double>> values(static_cast<std::size_t>(m));
-    const auto n_groups = static_cast<Index>(groups.size());
+    ColumnStore store(m, m, omp_get_max_threads());
+    for (const RowBand& band : row_bands(M, groups, bands)) {
+        const SparseMatrix Mt = transposed_rows(M, band.first, band.last);
+        const auto n_groups = static_cast<Index>(band.groups.size());
 #pragma omp parallel if (n_groups > 1)
-    {
-        RowAccumulator<W> mt(n), xmt(n), result(m);
-        std::vector<Index> sorted;
+        {
+            const int thread = omp_get_thread_num();
+            RowAccumulator<W> mt(n), xmt(n), result(m);
+            std::vector<Index> sorted;
 #pragma omp for schedule(dynamic, 1)
-        for (Index g = 0; g < n_groups; ++g) {
-            const IndexVector& J = groups[static_cast<std::size_t>(g)];
-            for (Index c = 0; c < J.size(); ++c)
-                for (SparseMatrix::InnerIterator it(Mt, J[c]); it; ++it)
-                    mt.row(static_cast<Index>(it.row()))[c] = it.value();
-            accumulate(X, x_runs, mt, xmt, 0);
-            const Index first = J.minCoeff();
-            if (by_rows(M, Mt, xmt, first))
-                accumulate_rows(Mt, xmt, result, first);
-            else
-                accumulate(M, m_runs, xmt, result, first);
-            sorted = result.keys();
-            std::sort(sorted.begin(), sorted.end());
-            for (Index c = 0; c < J.size(); ++c) {
-                auto& col_rows = rows[static_cast<std::size_t>(J[c])];
-                auto& col_values = values[static_cast<std::size_t>(J[c])];
-                for (const Index r : sorted) {
-                    const double v = result.existing_row(r)[c];
-                    if (r >= J[c] && v != 0.0) {
-                        col_rows.push_back(r);
-                        col_values.push_back(v);
+            for (Index g = 0; g < n_groups; ++g) {
+                const IndexVector& J = groups[static_cast<std::size_t>(band.groups[g])];
+                for (Index c = 0; c < J.size(); ++c)
+                    for (SparseMatrix::InnerIterator it(Mt, J[c] - band.first); it; ++it)
+                        mt.row(static_cast<Index>(it.row()))[c] = it.value();
+                accumulate(X, x_runs, mt, xmt, 0);
+                const Index first = J.minCoeff();
+                if (by_rows(M, Mt, band, xmt, first)) {
+                    accumulate_rows(Mt, band.first, xmt, result, first);
+                    if (band.last < m) accumulate(M, m_runs, xmt, result, band.last);
+                } else {
+                    accumulate(M, m_runs, xmt, result, first);
+                }
+                sorted = result.keys();
+                std::sort(sorted.begin(), sorted.end());
+                for (Index c = 0; c < J.size(); ++c) {
+                    store.begin(thread, J[c], static_cast<Index>(sorted.size()));
+                    for (const Index r : sorted) {
+                        const double v = result.existing_row(r)[c];
+                        if (r >= J[c] && v != 0.0) store.push(thread, J[c], r, v);
                     }
                 }
+                mt.clear();
+                xmt.clear();
+                result.clear();
             }
-            mt.clear();
-            xmt.clear();
-            result.clear();
         }
     }
-    return lower_from_columns(rows, values);
+    return store.take();
 }
 
 }  // namespace
@@ -576,11 +719,12 @@ SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
     if (static_cast<double>(M.nonZeros()) >= kDenseCongruence * entries(M) &&
         dense_congruence_fits(M, X))
         return dense_congruence(M, X);
-    const SparseMatrix Mt = M.transpose();
-    if (widest <= 8) return grouped_congruence<8>(M, Mt, X, groups);
-    if (widest <= 16) return grouped_congruence<16>(M, Mt, X, groups);
-    if (widest <= 24) return grouped_congruence<24>(M, Mt, X, groups);
-    return grouped_congruence<kMaxGroup>(M, Mt, X, groups);
+    const int bands =
+        static_cast<double>(M.nonZeros()) <= kBandedCongruence * entries(M) ? kCongruenceBands : 1;
+    if (widest <= 8) return grouped_congruence<8>(M, X, groups, bands);
+    if (widest <= 16) return grouped_congruence<16>(M, X, groups, bands);
+    if (widest <= 24) return grouped_congruence<24>(M, X, groups, bands);
+    return grouped_congruence<kMaxGroup>(M, X, groups, bands);
 }
 
 std::vector<IndexVector> consecutive_groups(Index n, Index size) {

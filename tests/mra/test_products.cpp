@@ -52,6 +52,48 @@ TEST(MraCongruence, EveryKernelIsTheGalerkinProduct) {
         }
 }
 
+// A sparse M (at most 5% dense) is read through bands of its rows, transposed one at a time.
+// Here M is banded like a localized C̃ (each row's entries near its position), 1.3% dense, and
+// the groups are like a grid's node blocks: two runs of 4 rows, `stride` rows apart, so that a
+// band's groups reach into the next band's rows. Groups read their band's rows by rows where
+// most of those rows' entries meet their product with X, by columns else, and the rows past
+// their band by columns (leaving those out fails both cases). Same sums in another order: 1e-13.
+TEST(MraCongruence, SparseRowsAreReadBandByBand) {
+    const Index m = 1200, n = 1500, width = 20, stride = 60;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> value(-1.0, 1.0);
+    std::vector<Eigen::Triplet<double, Index>> t;
+    for (Index i = 0; i < m; ++i) {
+        const Index centre = i * n / m;
+        for (Index j = std::max<Index>(0, centre - width / 2);
+             j < std::min<Index>(n, centre + width / 2); ++j)
+            t.emplace_back(i, j, value(rng));
+    }
+    SparseMatrix M(m, n);
+    M.setFromTriplets(t.begin(), t.end());
+    ASSERT_LT(static_cast<double>(M.nonZeros()), 0.05 * m * n);
+    std::vector<IndexVector> groups;
+    for (Index b = 0; b < m; b += 2 * stride)
+        for (Index r = b; r < b + stride; r += 4) {
+            IndexVector J(8);
+            for (Index c = 0; c < 4; ++c) {
+                J[c] = r + c;
+                J[4 + c] = r + stride + c;
+            }
+            groups.push_back(J);
+        }
+    for (const double x_density : {0.5, 0.01}) {
+        const SparseMatrix half = random_sparse(n, n, x_density / 2, 7);
+        SparseMatrix X = SparseMatrix(half + SparseMatrix(half.transpose()));
+        for (Index i = 0; i < n; ++i) X.coeffRef(i, i) += 1.0;
+        X.makeCompressed();
+        const SparseMatrix A = congruence(M, X, groups);
+        const Matrix expected = Matrix(M) * Matrix(X) * Matrix(M).transpose();
+        const Matrix lower = expected.triangularView<Eigen::Lower>();
+        EXPECT_LT((Matrix(A) - lower).norm(), 1e-13 * expected.norm()) << "X " << x_density;
+    }
+}
+
 // W A Y fused: the dense product to round-off, with the structural pattern of the two sparse
 // products (a column of Y hitting only cancelling entries keeps them as stored zeros), for a
 // W wider than tall (B^k) and Y wide (R), with 400 columns so that both threads take part;
