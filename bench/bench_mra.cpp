@@ -5,7 +5,7 @@
 //   bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7]
 //             [radius_grid=fine|coarse] [refinement=linear|dirac] [patch=1|Nc (N clipped)]
 //             [scene=checker|FILE] [invariance=1|0] [localization=node|cell]
-//             [relaxation=0] [fine_timing=1|0]
+//             [relaxation=0] [fine_timing=1|0] [wavelet_stiffness=1|0]
 //
 // scene "checker": the grid spans [0, NX/NY] x [0, 1] x [0, NZ/NY] (cubic cells), hung from its
 // face y = 1 under gravity and a traction on y = 0, with the checker inclusions of the hierarchy
@@ -16,6 +16,8 @@
 // eliminated, as a fine FEM solves) runs before the build, so that its factor is freed first;
 // factorize and solve times are medians of up to 5 runs (as many as fit in 2 s). fine_timing 0
 // skips that timing (at 64^3 hexes it takes as long as the reference solve: about 15 minutes).
+// wavelet_stiffness 0 builds without keeping B^k (Options::store_wavelet_stiffness), which the
+// coarse model and the coarsest solve do not read.
 // Phases longer than a second are reported on stderr as they end, with the process's peak
 // resident memory so far (the phase where it grows is where the memory went).
 #include <algorithm>
@@ -100,7 +102,7 @@ int run(int argc, char** argv) {
             "usage: bench_mra NX NY NZ [levels=2] [radius=5|inf|r1,r2,..] [truncation=1e-7] "
             "[radius_grid=fine|coarse] [refinement=linear|dirac] [patch=1|Nc (N clipped)] "
             "[scene=checker|FILE] [invariance=1|0] [localization=node|cell] [relaxation=0] "
-            "[fine_timing=1|0]\n");
+            "[fine_timing=1|0] [wavelet_stiffness=1|0]\n");
         return 2;
     }
     const Eigen::Vector3i cells(std::atoi(argv[1]), std::atoi(argv[2]), std::atoi(argv[3]));
@@ -129,6 +131,7 @@ int run(int argc, char** argv) {
                                                                   : cg::mra::Localization::Node;
     o.relaxation = argc > 13 ? std::atof(argv[13]) : 0.0;
     const bool fine_timing = argc > 14 ? std::atoi(argv[14]) != 0 : true;
+    o.store_wavelet_stiffness = argc > 15 ? std::atoi(argv[15]) != 0 : true;
     auto t0 = std::chrono::steady_clock::now();
     const cg::test::GridProblem p = make_problem(cells, scene);
     std::printf("%s grid %dx%dx%d: %ld nodes, %ld DOFs; problem set up in %.2f s, peak %.0f MB\n",

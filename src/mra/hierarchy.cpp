@@ -559,7 +559,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
     SparseMatrix A_full;
     bool runs_pending = false;  // C̃^{q-1} is still Phi_present, not yet L.C_adapted
     const auto store_pending_runs = [&] {
-        h.levels[static_cast<std::size_t>(q - 2)].C_adapted = RunMatrix(Phi_present);
+        h.levels[static_cast<std::size_t>(q - 2)].C_adapted = RunMatrix(std::move(Phi_present));
         runs_pending = false;
     };
     IndexVector dofs_next = h.fine_dofs;
@@ -846,7 +846,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             Phi_present = std::move(Ct);
             runs_pending = true;
         } else {
-            L.C_adapted = RunMatrix(Ct);
+            L.C_adapted = RunMatrix(std::move(Ct));
             Phi_present = std::move(Phi_next);
         }
         Ct = SparseMatrix();

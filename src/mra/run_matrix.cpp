@@ -1,6 +1,12 @@
 #include "coarsegrain/mra/run_matrix.hpp"
 
 #include <algorithm>
+#include <cstdint>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
 
 #include "coarsegrain/common/error.hpp"
 
@@ -13,29 +19,61 @@ namespace {
 constexpr Index kMinParallelColumns = 2;
 constexpr Index kMinParallelEntries = 1 << 16;
 
+/// Returns the whole pages within [begin, end) to the system (their contents are lost): memory
+/// the program reads no more but cannot free yet, as part of a larger allocation.
+void release_pages(const void* begin, const void* end) {
+#if defined(__linux__)
+    const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+    const std::uintptr_t first = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
+    const std::uintptr_t last = reinterpret_cast<std::uintptr_t>(end) / page * page;
+    if (first < last)
+        madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
+#else
+    (void)begin;
+    (void)end;
+#endif
+}
+
 }  // namespace
 
 RunMatrix::RunMatrix(const SparseMatrix& M) : m_rows(M.rows()), m_cols(M.cols()) {
-    SparseMatrix compressed;
-    const SparseMatrix* m = &M;
-    if (!M.isCompressed()) {
-        compressed = M;
+    if (M.isCompressed()) {
+        read(M, false);
+    } else {
+        SparseMatrix compressed = M;
         compressed.makeCompressed();
-        m = &compressed;
+        read(compressed, true);
     }
-    const Index* outer = m->outerIndexPtr();
-    const Index* inner = m->innerIndexPtr();
-    m_values.assign(m->valuePtr(), m->valuePtr() + outer[m_cols]);
+}
+
+RunMatrix::RunMatrix(SparseMatrix&& M) : m_rows(M.rows()), m_cols(M.cols()) {
+    M.makeCompressed();
+    read(M, true);
+    M = SparseMatrix();
+}
+
+void RunMatrix::read(const SparseMatrix& m, bool release) {
+    const Index* outer = m.outerIndexPtr();
+    const Index* inner = m.innerIndexPtr();
+    m_values.reserve(static_cast<std::size_t>(outer[m_cols]));
     const auto same_pattern = [&](Index a, Index b) {
         return outer[a + 1] - outer[a] == outer[b + 1] - outer[b] &&
                std::equal(inner + outer[a], inner + outer[a + 1], inner + outer[b]);
     };
+    Index released = 0;  // entries of m before this one are read no more
     for (Index j = 0; j < m_cols; ++j) {
+        m_values.insert(m_values.end(), m.valuePtr() + outer[j], m.valuePtr() + outer[j + 1]);
         if (j > 0 && same_pattern(m_group_first.back(), j)) continue;
         if (j > 0) {
             m_group_first.push_back(j);
             m_group_runs.push_back(static_cast<Index>(m_runs.size()));
             m_group_values.push_back(outer[j]);
+        }
+        // The patterns of columns before this group's first are compared no more.
+        if (release && outer[j] - released >= kReleaseEntries) {
+            release_pages(m.valuePtr() + released, m.valuePtr() + outer[j]);
+            release_pages(inner + released, inner + outer[j]);
+            released = outer[j];
         }
         for (Index p = outer[j]; p < outer[j + 1]; ++p) {
             if (p > outer[j] && inner[p] == inner[p - 1] + 1)

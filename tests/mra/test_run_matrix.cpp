@@ -75,6 +75,18 @@ TEST(RunMatrix, KeepsEveryEntryBitForBit) {
     }
 }
 
+// From a moved matrix, whose pages are returned to the system as they are read (every 2^20
+// entries): the same storage, bit for bit, over a matrix of several such spans, and the moved
+// one left empty.
+TEST(RunMatrix, FromAMovedMatrixKeepsEveryEntryBitForBit) {
+    const SparseMatrix M = blocky_matrix(3000, 240000, 3, 5u);
+    ASSERT_GT(M.nonZeros(), 3 << 20);
+    SparseMatrix moved = M;
+    const RunMatrix R(std::move(moved));
+    EXPECT_EQ(moved.nonZeros(), 0);
+    expect_same_storage(R.sparse(), M);
+}
+
 TEST(RunMatrix, ProductsAreEigensToRoundOff) {
     // Large enough for the parallel paths (>= 65,536 entries), and one right-hand side (serial).
     const SparseMatrix M = blocky_matrix(2000, 30000, 3, 11u);
