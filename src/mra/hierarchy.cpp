@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "coarsegrain/common/allocator.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/mra/level_meshes.hpp"
 #include "detail.hpp"
@@ -177,6 +178,23 @@ std::size_t storage_bytes(const SparseMatrix& M) {
     return static_cast<std::size_t>(M.nonZeros()) * (sizeof(double) + sizeof(Index)) +
            static_cast<std::size_t>(M.outerSize() + 1) * sizeof(Index);
 }
+
+namespace {
+
+/// The lower triangle of M (compressed), in M's storage: its entries moved down in place and the
+/// pages past them returned to the system, so that M and its lower triangle are not held at once.
+SparseMatrix lower_in_place(SparseMatrix&& M) {
+    M.prune([](Index row, Index col, double) { return row >= col; });
+    const auto size = static_cast<std::size_t>(M.nonZeros());
+    const std::size_t allocated = M.data().allocatedSize();
+    release_pages(M.valuePtr() + size, M.valuePtr() + allocated);
+    release_pages(M.innerIndexPtr() + size, M.innerIndexPtr() + allocated);
+    SparseMatrix lower;
+    lower.swap(M);
+    return lower;
+}
+
+}  // namespace
 
 SparseMatrix symmetric_from_lower(const SparseMatrix& lower) {
     SparseMatrix full = lower.selfadjointView<Eigen::Lower>();
@@ -554,8 +572,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
     };
     // A^{k+1} with both triangles, as the products take it: the fine operator, then the level
     // above, held only so while its step runs (Level::A keeps the lower triangle).
-    const SparseMatrix* const fine_operator = K ? &h.A_fine : A_free;
-    const SparseMatrix* A_next = fine_operator;
+    const SparseMatrix* A_next = K ? &h.A_fine : A_free;
     SparseMatrix A_full;
     bool runs_pending = false;  // C̃^{q-1} is still Phi_present, not yet L.C_adapted
     const auto store_pending_runs = [&] {
@@ -705,6 +722,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                 Ct = L.C_dagger + product(Z, L.W);
             }
             Ct.makeCompressed();
+            // C̃^{q-1}, read by the solves, is stored as runs once they are done, unless Φ^k is
+            // formed from it, before A^k and B^k are formed beside it (the 64^3 checker, 3
+            // levels: 7.3 GB as CSC, 5.1 GB as runs).
+            if (runs_pending && !phi_read_after) store_pending_runs();
         } else {
             const Phase phase(tag + "C adapted (localized solves)", &h.timings);
             detail::LocalizationRings lr;
@@ -822,12 +843,19 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             const Phase phase(tag + "A", &h.timings);
             L.A = detail::congruence(Ct, A, dof_groups(h, L));
         }
-        // A^{k+1} (not the fine operator) is kept as its lower triangle from here on, and its
-        // copy with both triangles freed before C̃^{q-1} may be stored as runs below, beside
-        // its sparse form (48^3 checker, 3 levels, coarse step in rings: the build's peak 23.5
-        // GB there).
+        if (relaxed && options.store_wavelet_stiffness) {
+            // The relaxed solves do not read B^k, which is made as it is kept (its lower
+            // triangle) after them, through which it was held (the 56^3 checker, 3 levels, 4
+            // fine rings: the coarse step's peak 17.5 -> 12.6 GB).
+            const Phase phase(tag + "B", &h.timings);
+            L.B = detail::congruence(L.W, A, detail::consecutive_groups(L.W.rows(), 8 * dim));
+        }
+        // A^{k+1} (not the fine operator) is kept as its lower triangle from here on, in the
+        // storage of its copy with both triangles, before C̃^{q-1} may be stored as runs below,
+        // beside its sparse form (48^3 checker, 3 levels, coarse step in rings: the build's peak
+        // 23.5 GB with both held there).
         if (k + 1 < q) {
-            h.levels[static_cast<std::size_t>(k)].A = A_full.triangularView<Eigen::Lower>();
+            h.levels[static_cast<std::size_t>(k)].A = lower_in_place(std::move(A_full));
             A_full = SparseMatrix();
         }
         if (options.store_bases) {
@@ -850,17 +878,6 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             Phi_present = std::move(Phi_next);
         }
         Ct = SparseMatrix();
-        if (relaxed && options.store_wavelet_stiffness) {
-            // B^k, made as it is kept (its lower triangle) after the step's solves, through which
-            // it was held, and after C̃^{q-1} is stored as runs (the 56^3 checker, 3 levels, 4
-            // fine rings: the coarse step's peak 17.5 -> 12.6 GB, the build's 18.0 -> 17.0).
-            const Phase phase(tag + "B", &h.timings);
-            const SparseMatrix A_above =
-                k + 1 < q ? symmetric_from_lower(h.levels[static_cast<std::size_t>(k)].A)
-                          : SparseMatrix();
-            L.B = detail::congruence(L.W, k + 1 < q ? A_above : *fine_operator,
-                                     detail::consecutive_groups(L.W.rows(), 8 * dim));
-        }
         L.build_seconds = seconds_since(t0);
         // A^k with both triangles, as the next step's products take it, alone: its lower
         // triangle is stored back after the step's Galerkin product.

@@ -1,13 +1,8 @@
 #include "coarsegrain/mra/run_matrix.hpp"
 
 #include <algorithm>
-#include <cstdint>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#include <unistd.h>
-#endif
-
+#include "coarsegrain/common/allocator.hpp"
 #include "coarsegrain/common/error.hpp"
 
 namespace coarsegrain::mra {
@@ -18,21 +13,6 @@ namespace {
 /// on one thread: the scatter of M x runs one right-hand side per thread.
 constexpr Index kMinParallelColumns = 2;
 constexpr Index kMinParallelEntries = 1 << 16;
-
-/// Returns the whole pages within [begin, end) to the system (their contents are lost): memory
-/// the program reads no more but cannot free yet, as part of a larger allocation.
-void release_pages(const void* begin, const void* end) {
-#if defined(__linux__)
-    const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
-    const std::uintptr_t first = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
-    const std::uintptr_t last = reinterpret_cast<std::uintptr_t>(end) / page * page;
-    if (first < last)
-        madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
-#else
-    (void)begin;
-    (void)end;
-#endif
-}
 
 }  // namespace
 

@@ -16,4 +16,9 @@ namespace coarsegrain {
 /// both settings (false under a sanitizer's or another allocator).
 bool retain_freed_memory();
 
+/// Returns the whole pages within [begin, end) to the system, whatever the allocator keeps:
+/// memory the program reads no more but cannot free yet, as part of a larger allocation (its
+/// contents are lost; the pages read as zeros if touched again). A no-op off Linux.
+void release_pages(const void* begin, const void* end);
+
 }  // namespace coarsegrain
