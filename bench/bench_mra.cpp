@@ -170,12 +170,16 @@ int run(int argc, char** argv) {
                     k, static_cast<long>(L.A.rows()), static_cast<long>(L.C_adapted.nonZeros()),
                     static_cast<long>(L.A.nonZeros()), static_cast<long>(L.B.nonZeros()),
                     static_cast<long>(L.Phi.nonZeros()), static_cast<long>(L.Psi.nonZeros()));
-        // Table 1's columns: the fraction of zeros of B^k, C̃^k and A^k (whole matrices).
+        // Table 1's columns: the fraction of zeros of B^k (if kept), C̃^k and A^k (whole
+        // matrices).
         const auto zeros = [](double nonzeros, double rows, double cols) {
             return 100.0 * (1.0 - nonzeros / (rows * cols));
         };
-        std::printf("level %d: sparsity (Table 1) B %.2f%%, C %.2f%%, A %.2f%%\n", k,
-                    zeros(cg::mra::symmetric_nonzeros(L.B), L.B.rows(), L.B.cols()),
+        char b_sparsity[32] = "not kept";
+        if (L.B.rows() > 0)
+            std::snprintf(b_sparsity, sizeof b_sparsity, "%.2f%%",
+                          zeros(cg::mra::symmetric_nonzeros(L.B), L.B.rows(), L.B.cols()));
+        std::printf("level %d: sparsity (Table 1) B %s, C %.2f%%, A %.2f%%\n", k, b_sparsity,
                     zeros(L.C_adapted.nonZeros(), L.C_adapted.rows(), L.C_adapted.cols()),
                     zeros(cg::mra::symmetric_nonzeros(L.A), L.A.rows(), L.A.cols()));
     }
