@@ -724,7 +724,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             Ct.makeCompressed();
             // C̃^{q-1}, read by the solves, is stored as runs once they are done, unless Φ^k is
             // formed from it, before A^k and B^k are formed beside it (the 64^3 checker, 3
-            // levels: 7.3 GB as CSC, 5.1 GB as runs).
+            // levels: 7.3 GB as CSC, about 4.9 GB as runs).
             if (runs_pending && !phi_read_after) store_pending_runs();
         } else {
             const Phase phase(tag + "C adapted (localized solves)", &h.timings);

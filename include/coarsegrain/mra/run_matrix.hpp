@@ -26,7 +26,7 @@ class RunMatrix {
     /// M's entries, as above, M's storage returned to the system as it is read (on Linux, every
     /// kReleaseEntries entries) and M left empty: M and the runs are not held at once (the build
     /// stores C̃^{q-1} so after the solves that read it: 6.1e8 entries on the 64^3 checker with 4
-    /// fine rings, 7.3 GB as CSC, 5.1 GB as runs).
+    /// fine rings, 7.3 GB as CSC, about 4.9 GB as runs).
     explicit RunMatrix(SparseMatrix&& M);
 
     Index rows() const { return m_rows; }
