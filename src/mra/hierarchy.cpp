@@ -658,13 +658,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         }
         const SparseMatrix& A = *A_next;
         SparseMatrix R;
-        {
+        if (!relaxed) {  // the relaxed solves do not read B^k: it is made after them, below
             const Phase phase(tag + "B", &h.timings);
-            // The other solves read B^k whole; the relaxed cell-wise solves do not read it (it is
-            // made after the step, below).
-            if (!relaxed)
-                L.B = detail::symmetrized(
-                    detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
+            L.B =
+                detail::symmetrized(detail::triple_product(L.W, A, SparseMatrix(L.W.transpose())));
             if (!step_by_cell)
                 R = detail::triple_product(L.W, A, SparseMatrix(L.C_dagger.transpose()));
         }
