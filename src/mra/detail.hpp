@@ -7,6 +7,7 @@
 #include "coarsegrain/fem/element.hpp"
 #include "coarsegrain/material/material.hpp"
 #include "coarsegrain/mesh/mesh.hpp"
+#include "products.hpp"
 
 namespace coarsegrain::mra::detail {
 
@@ -164,14 +165,16 @@ SparseMatrix cell_localized_z(const SparseMatrix& B, const SparseMatrix& W,
 /// the global hierarchy's level k: the composed measurements are those of the global
 /// construction, whose coefficients are measurements). Such a step is whole_level_refinement,
 /// in the measurements' basis (its coefficients are G's, not nodal values), and does not read
-/// Phi (it may be empty). A: A^{k+1}, both triangles; Phi: Φ^{k+1} on the present fine DOFs
-/// (rows: level-(k+1) DOFs).
+/// Phi (it may be empty). A: A^{k+1}, stored as `a_stored` says (the lower triangle of a coarser
+/// level, as Level::A keeps it: the step then holds no copy with both triangles; the 64^3
+/// checker's A^2: 5.1 GB); Phi: Φ^{k+1} on the present fine DOFs (rows: level-(k+1) DOFs).
 /// @throws Error if G and C differ in shape, or level k+1 has no interior node with all its DOFs
 /// (no scale d)
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
                                         const SparseMatrix& G, const SparseMatrix& Phi,
                                         const std::vector<CellStiffness>& parts,
-                                        const StepGeometry& g, int rings, double relaxation);
+                                        const StepGeometry& g, int rings, double relaxation,
+                                        Stored a_stored = Stored::Both);
 
 /// Whether the region of every part (`rings` rings around it, reaching the grid's boundary where
 /// at most rings / kRegionSnap short) is the whole level k+1.
@@ -189,10 +192,12 @@ bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, cons
 /// and 2,268 measurements: G^T G took 27.8 s, M 7.5 s and M's dense factorization 15.5 s).
 /// Where A is singular (no Dirichlet conditions hold the model: SpdSolver reports
 /// NotPositiveDefinite), Y = M^{-1} G^T: the penalty is constant where G w is fixed, so the
-/// constrained minimizer is the same. A: both triangles, n x n; G: m x n; penalty > 0.
+/// constrained minimizer is the same. A: n x n, stored as `a_stored` says; G: m x n;
+/// penalty > 0.
 /// @throws Error on mismatched shapes, a penalty <= 0, or G A^{-1} G^T not definite (dependent
 /// measurements); NotPositiveDefinite if M is not definite
-SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G, double penalty);
+SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G, double penalty,
+                                    Stored a_stored = Stored::Both);
 
 /// A sparse left inverse X^T of C^T (C X = I, the role of C^† in Eq. 11) that reproduces rigid
 /// motions, X C r = r for the modes rig_fine (Rig^{k+1}), which cell localization needs: then

@@ -560,6 +560,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
     const auto cell_wise_step = [&](int k) {
         return by_cell && (options.relaxation > 0 || !std::isinf(radius_of(k)));
     };
+    const auto relaxed_step = [&](int k) { return cell_wise_step(k) && options.relaxation > 0; };
     // Rings of the finer level of step k (building level k) in a finite radius (an infinite
     // max_radius: 1e6); a radius on the coarser level's grid is scaled by the ratio of the
     // levels' spacings (2 on grids, the ratio of mean edge lengths on level meshes).
@@ -570,9 +571,11 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         const double ratio = spacing_of(k) / spacing_of(k + 1);
         return static_cast<int>(std::min(std::round(rings * ratio), 1e6));
     };
-    // A^{k+1} with both triangles, as the products take it: the fine operator, then the level
-    // above, held only so while its step runs (Level::A keeps the lower triangle).
+    // A^{k+1} as the next step reads it: the fine operator, then the level above, with both
+    // triangles held only while a step that needs them runs (Level::A keeps the lower triangle,
+    // which a relaxed step reads in place).
     const SparseMatrix* A_next = K ? &h.A_fine : A_free;
+    detail::Stored A_next_stored = detail::Stored::Both;
     SparseMatrix A_full;
     bool runs_pending = false;  // C̃^{q-1} is still Phi_present, not yet L.C_adapted
     const auto store_pending_runs = [&] {
@@ -641,7 +644,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         // coefficients are nodal values), the others from a left inverse of C^{k,T}; a relaxed
         // step on the whole level is taken in the basis of its measurements G.
         const bool step_by_cell = cell_wise_step(k);
-        const bool relaxed = step_by_cell && options.relaxation > 0;
+        const bool relaxed = relaxed_step(k);
         Matrix rig_measured;  // G Rig^{k+1}, after a relaxed step on the whole level
         // Rig^k, the coefficients of the rigid motions at level k (invariance correction): their
         // measurements C^k Rig^{k+1} (C^k C̃^{k,T} = I) or G Rig^{k+1}, or with localized relaxed
@@ -707,7 +710,7 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
                     }
                 }
                 Ct = detail::relaxed_adapted_refinement(A, L.C, composed, Phi_present, parts, g,
-                                                        rings, options.relaxation);
+                                                        rings, options.relaxation, A_next_stored);
             } else {
                 SparseMatrix Z;
                 {
@@ -838,22 +841,27 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         }
         {
             const Phase phase(tag + "A", &h.timings);
-            L.A = detail::congruence(Ct, A, dof_groups(h, L));
+            L.A = detail::congruence(Ct, A, dof_groups(h, L), A_next_stored);
+        }
+        // A^{k+1} (not the fine operator) is kept as its lower triangle from here on, in the
+        // storage of its copy with both triangles, before B^k is formed and C̃^{q-1} may be
+        // stored as runs below, beside its sparse form (48^3 checker, 3 levels, coarse step in
+        // rings: the build's peak 23.5 GB with both held there).
+        if (k + 1 < q && A_next_stored == detail::Stored::Both) {
+            h.levels[static_cast<std::size_t>(k)].A = lower_in_place(std::move(A_full));
+            A_full = SparseMatrix();
         }
         if (relaxed && options.store_wavelet_stiffness) {
             // The relaxed solves do not read B^k, which is made as it is kept (its lower
             // triangle) after them, through which it was held (the 56^3 checker, 3 levels, 4
-            // fine rings: the coarse step's peak 17.5 -> 12.6 GB).
+            // fine rings: the coarse step's peak 17.5 -> 12.6 GB), from the fine operator or
+            // the lower triangle of A^{k+1} (64^3 checker, 3 levels: B^1's peak 21.2 GB beside
+            // A^2 with both triangles).
             const Phase phase(tag + "B", &h.timings);
-            L.B = detail::congruence(L.W, A, detail::consecutive_groups(L.W.rows(), 8 * dim));
-        }
-        // A^{k+1} (not the fine operator) is kept as its lower triangle from here on, in the
-        // storage of its copy with both triangles, before C̃^{q-1} may be stored as runs below,
-        // beside its sparse form (48^3 checker, 3 levels, coarse step in rings: the build's peak
-        // 23.5 GB with both held there).
-        if (k + 1 < q) {
-            h.levels[static_cast<std::size_t>(k)].A = lower_in_place(std::move(A_full));
-            A_full = SparseMatrix();
+            const auto wavelets = detail::consecutive_groups(L.W.rows(), 8 * dim);
+            L.B = k + 1 == q
+                      ? detail::congruence(L.W, A, wavelets)
+                      : detail::congruence(L.W, h.level(k + 1).A, wavelets, detail::Stored::Lower);
         }
         if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);
@@ -876,12 +884,17 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         }
         Ct = SparseMatrix();
         L.build_seconds = seconds_since(t0);
-        // A^k with both triangles, as the next step's products take it, alone: its lower
-        // triangle is stored back after the step's Galerkin product.
-        if (k > 1) {
+        // A^k as the next step reads it: a relaxed step its lower triangle in place (the 64^3
+        // checker's coarse step: 2.5 GB less), the others a copy with both triangles, alone,
+        // whose lower triangle is stored back after the step's Galerkin product.
+        if (k > 1 && relaxed_step(k - 1)) {
+            A_next = &L.A;
+            A_next_stored = detail::Stored::Lower;
+        } else if (k > 1) {
             A_full = symmetric_from_lower(L.A);
             L.A = SparseMatrix();
             A_next = &A_full;
+            A_next_stored = detail::Stored::Both;
         }
         dofs_next = L.dofs;
         finest_next = std::move(finest);

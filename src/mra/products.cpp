@@ -9,7 +9,9 @@
 #include <memory>
 #include <new>
 #include <numeric>
+#include <utility>
 
+#include "coarsegrain/common/allocator.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
@@ -307,65 +309,102 @@ class RowAccumulator {
 /// Longest run of columns accumulate takes at once: a node's DOFs in 3D.
 constexpr Index kMaxColumnRun = 3;
 
-/// S's columns in runs of at most kMaxColumnRun consecutive columns with identical row patterns
-/// (solve::column_groups: a node's DOFs, in an interleaved FEM matrix or in C̃, see
-/// truncate_rows): run r is columns [start[r], start[r + 1]), and column f is in run run_of[f].
-struct ColumnRuns {
-    std::vector<Index> start, run_of;
+/// Whether columns a and b of S have the same rows outside [first, last).
+bool same_rows_outside(const SparseMatrix& S, Index a, Index b, Index first, Index last) {
+    const Index* outer = S.outerIndexPtr();
+    const Index* inner = S.innerIndexPtr();
+    const auto outside = [&](Index j) {
+        const Index *begin = inner + outer[j], *end = inner + outer[j + 1];
+        const Index* from = std::lower_bound(begin, end, first);
+        return std::array{begin, from, std::lower_bound(from, end, last), end};
+    };
+    const auto x = outside(a), y = outside(b);
+    return std::equal(x[0], x[1], y[0], y[1]) && std::equal(x[2], x[3], y[2], y[3]);
+}
 
-    explicit ColumnRuns(const SparseMatrix& S)
-        : start(solve::column_groups(S, kMaxColumnRun)),
-          run_of(static_cast<std::size_t>(S.cols())) {
+/// S's columns in runs of at most kMaxColumnRun consecutive columns s.. whose row patterns agree
+/// outside the run's own rows [offset + s, offset + s + length): a node's DOFs in an interleaved
+/// symmetric matrix stored whole, by its lower triangle or as the transposed rows of that (the
+/// node's own block is triangular in the last two), and in C̃ (see truncate_rows). Run r is
+/// columns [start[r], start[r + 1]), and column f is in run run_of[f].
+struct ColumnRuns {
+    std::vector<Index> start{0}, run_of;
+
+    explicit ColumnRuns(const SparseMatrix& S, Index offset = 0)
+        : run_of(static_cast<std::size_t>(S.cols())) {
+        for (Index j = 1; j < S.cols(); ++j)
+            if (j - start.back() >= kMaxColumnRun ||
+                !same_rows_outside(S, start.back(), j, offset + start.back(), offset + j + 1))
+                start.push_back(j);
+        start.push_back(S.cols());
         for (std::size_t r = 0; r + 1 < start.size(); ++r)
             std::fill(run_of.begin() + start[r], run_of.begin() + start[r + 1],
                       static_cast<Index>(r));
     }
 };
 
-/// acc[i, :] += sum_t S[i, s + t] rows[s + t, :] over the L columns s.. of one run of S, from
-/// row `first_row` of S on: each row of acc is read and written once per run instead of once
-/// per column (the kernel streams acc's rows; on the 64^3 Galerkin product that traffic
-/// dominates).
+/// acc[i, :] += sum_t S[i, s + t] rows[offset + s + t, :] over the L columns s.. of one run of
+/// S, from row `first_row` of S on: each row of acc is read and written once per run instead of
+/// once per column (the kernel streams acc's rows; on the 64^3 Galerkin product that traffic
+/// dominates), but the run's own rows [offset + s, offset + s + L), column by column.
 template <int W, int L>
 void accumulate_run(const SparseMatrix& S, Index s, const RowAccumulator<W>& rows,
-                    RowAccumulator<W>& acc, Index first_row) {
+                    RowAccumulator<W>& acc, Index first_row, Index offset) {
     const Index* outer = S.outerIndexPtr();
     const Index* inner = S.innerIndexPtr();
     const double* value = S.valuePtr();
     const double* p[L];
-    for (int t = 0; t < L; ++t) p[t] = rows.existing_row(s + t);
-    const Index size = outer[s + 1] - outer[s];
-    const Index* begin = inner + outer[s];
-    const Index* end = inner + outer[s + 1];
-    const Index* i = first_row > 0 ? std::lower_bound(begin, end, first_row) : begin;
-    for (const double* v = value + (i - inner); i != end; ++i, ++v) {
-        double* a = acc.row(*i);
-        for (int c = 0; c < W; ++c) {
-            double sum = v[0] * p[0][c];
-            for (int t = 1; t < L; ++t) sum += v[t * size] * p[t][c];
-            a[c] += sum;
-        }
+    // Per column: where its rows from first_row on begin, and where they enter and leave the
+    // run's own rows (the same rows before and after in every column).
+    Index begin[L], inside[L], after[L];
+    for (int t = 0; t < L; ++t) {
+        const Index *b = inner + outer[s + t], *e = inner + outer[s + t + 1];
+        const Index* from = std::lower_bound(b, e, first_row);
+        const Index* in = std::lower_bound(from, e, offset + s);
+        begin[t] = from - inner;
+        inside[t] = in - inner;
+        after[t] = std::lower_bound(in, e, std::max(first_row, offset + s + L)) - inner;
+        p[t] = rows.existing_row(offset + s + t);
     }
+    const auto joint = [&](const Index* at, Index count) {
+        for (Index k = 0; k < count; ++k) {
+            double* a = acc.row(inner[at[0] + k]);
+            for (int c = 0; c < W; ++c) {
+                double sum = value[at[0] + k] * p[0][c];
+                for (int t = 1; t < L; ++t) sum += value[at[t] + k] * p[t][c];
+                a[c] += sum;
+            }
+        }
+    };
+    joint(begin, inside[0] - begin[0]);
+    for (int t = 0; t < L; ++t)
+        for (Index k = inside[t]; k < after[t]; ++k) {
+            double* a = acc.row(inner[k]);
+            for (int c = 0; c < W; ++c) a[c] += value[k] * p[t][c];
+        }
+    joint(after, outer[s + 1] - after[0]);
 }
 
-/// acc[i, :] += S[i, f] rows[f, :] for every column f of S among the keys of `rows`, from row
-/// `first_row` of S on (S's row indices sorted), by the runs of S's columns whose every column
-/// is a key.
+/// acc[i, :] += S[i, f - offset] rows[f, :] for every key f of `rows` in [offset, offset +
+/// S.cols()), from row `first_row` of S on (S's row indices sorted), by the runs of S's columns
+/// whose every column is at a key.
 template <int W>
 void accumulate(const SparseMatrix& S, const ColumnRuns& runs, const RowAccumulator<W>& rows,
-                RowAccumulator<W>& acc, Index first_row) {
-    for (const Index f : rows.keys()) {
+                RowAccumulator<W>& acc, Index first_row, Index offset = 0) {
+    for (const Index key : rows.keys()) {
+        const Index f = key - offset;
+        if (f < 0 || f >= S.cols()) continue;
         const Index r = runs.run_of[static_cast<std::size_t>(f)];
         const Index s = runs.start[static_cast<std::size_t>(r)];
         const Index length = runs.start[static_cast<std::size_t>(r) + 1] - s;
         bool whole = length > 1;
-        for (Index t = s; whole && t < s + length; ++t) whole = rows.has(t);
+        for (Index t = s; whole && t < s + length; ++t) whole = rows.has(offset + t);
         if (!whole)
-            accumulate_run<W, 1>(S, f, rows, acc, first_row);
+            accumulate_run<W, 1>(S, f, rows, acc, first_row, offset);
         else if (f == s && length == 2)
-            accumulate_run<W, 2>(S, s, rows, acc, first_row);
+            accumulate_run<W, 2>(S, s, rows, acc, first_row, offset);
         else if (f == s)
-            accumulate_run<W, 3>(S, s, rows, acc, first_row);
+            accumulate_run<W, 3>(S, s, rows, acc, first_row, offset);
     }
 }
 
@@ -510,8 +549,10 @@ std::vector<RowBand> row_bands(const SparseMatrix& M, const std::vector<IndexVec
     return out;
 }
 
-/// M[first : last, :]^T: its column i - first is row i of M, with M's column indices ascending.
-SparseMatrix transposed_rows(const SparseMatrix& M, Index first, Index last) {
+/// M[first : last, :]^T: its column i - first is row i of M, with M's column indices ascending;
+/// `strictly_lower`: of M's entries below the diagonal only.
+SparseMatrix transposed_rows(const SparseMatrix& M, Index first, Index last,
+                             bool strictly_lower = false) {
     const Index n = M.cols();
     const Index* outer = M.outerIndexPtr();
     const Index* inner = M.innerIndexPtr();
@@ -520,7 +561,8 @@ SparseMatrix transposed_rows(const SparseMatrix& M, Index first, Index last) {
     Index* t_outer = T.outerIndexPtr();
     std::fill(t_outer, t_outer + (last - first) + 1, 0);
     for (Index f = 0; f < n; ++f) {
-        const Index* b = std::lower_bound(inner + outer[f], inner + outer[f + 1], first);
+        const Index from = strictly_lower ? std::max(first, f + 1) : first;
+        const Index* b = std::lower_bound(inner + outer[f], inner + outer[f + 1], from);
         begin[static_cast<std::size_t>(f)] = static_cast<Index>(b - inner);
         for (; b != inner + outer[f + 1] && *b < last; ++b) ++t_outer[*b - first + 1];
     }
@@ -559,16 +601,41 @@ bool by_rows(const SparseMatrix& M, const SparseMatrix& Mt, const RowBand& band,
     return scanned <= 2 * met;
 }
 
+/// The columns of M that the nonempty columns of Mt = M[rows, :]^T reach: [first, last).
+std::pair<Index, Index> reached_columns(const SparseMatrix& Mt) {
+    Index first = Mt.rows(), last = 0;
+    for (Index i = 0; i < Mt.outerSize(); ++i) {
+        const Index begin = Mt.outerIndexPtr()[i], end = Mt.outerIndexPtr()[i + 1];
+        if (begin == end) continue;
+        first = std::min(first, Mt.innerIndexPtr()[begin]);
+        last = std::max(last, Mt.innerIndexPtr()[end - 1] + 1);
+    }
+    return {std::min(first, last), last};
+}
+
+/// Returns the pages of S's entries to the system: a temporary about to be freed into a heap that
+/// keeps freed memory (retain_freed_memory), whose pages would stay resident beside the next
+/// results (the 64^3 checker's A^1 product: C̃^1 and A^2's upper triangle transposed, 3.8 GB).
+void release_entries(SparseMatrix& S) {
+    release_pages(S.valuePtr(), S.valuePtr() + S.nonZeros());
+    release_pages(S.innerIndexPtr(), S.innerIndexPtr() + S.nonZeros());
+}
+
 /// The lower triangle of M X M^T, group by group of kernel width W, band by band of M's rows
-/// (see congruence).
+/// (see congruence). X by its lower triangle (`x_lower`): per band, X's strictly upper entries
+/// in the columns the band's rows of M reach are the transposed rows of X there.
 template <int W>
 SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& X,
-                                const std::vector<IndexVector>& groups, int bands) {
+                                const std::vector<IndexVector>& groups, int bands, bool x_lower) {
     const Index m = M.rows(), n = M.cols();
     const ColumnRuns m_runs(M), x_runs(X);
     ColumnStore store(m, m, omp_get_max_threads());
     for (const RowBand& band : row_bands(M, groups, bands)) {
-        const SparseMatrix Mt = transposed_rows(M, band.first, band.last);
+        SparseMatrix Mt = transposed_rows(M, band.first, band.last);
+        const auto [reach_first, reach_last] = x_lower ? reached_columns(Mt) : std::pair{n, n};
+        SparseMatrix X_upper =
+            x_lower ? transposed_rows(X, reach_first, reach_last, true) : SparseMatrix(n, 0);
+        const ColumnRuns upper_runs(X_upper, reach_first);
         const auto n_groups = static_cast<Index>(band.groups.size());
 #pragma omp parallel if (n_groups > 1)
         {
@@ -582,6 +649,7 @@ SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& X,
                     for (SparseMatrix::InnerIterator it(Mt, J[c] - band.first); it; ++it)
                         mt.row(static_cast<Index>(it.row()))[c] = it.value();
                 accumulate(X, x_runs, mt, xmt, 0);
+                if (x_lower) accumulate(X_upper, upper_runs, mt, xmt, 0, reach_first);
                 const Index first = J.minCoeff();
                 if (by_rows(M, Mt, band, xmt, first)) {
                     accumulate_rows(Mt, band.first, xmt, result, first);
@@ -603,6 +671,8 @@ SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& X,
                 result.clear();
             }
         }
+        release_entries(Mt);
+        release_entries(X_upper);
     }
     return store.take();
 }
@@ -707,7 +777,7 @@ SparseMatrix symmetrized(SparseMatrix S) {
 }
 
 SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
-                        const std::vector<IndexVector>& groups) {
+                        const std::vector<IndexVector>& groups, Stored x_stored) {
     Index covered = 0, widest = 0;
     for (const IndexVector& J : groups) {
         covered += J.size();
@@ -716,15 +786,17 @@ SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
     CG_VERIFY(covered == M.rows() && widest <= kMaxGroup,
               "mra: congruence groups cover {} of {} rows, widest {} (at most {})", covered,
               M.rows(), widest, kMaxGroup);
-    if (static_cast<double>(M.nonZeros()) >= kDenseCongruence * entries(M) &&
-        dense_congruence_fits(M, X))
-        return dense_congruence(M, X);
+    const bool dense = static_cast<double>(M.nonZeros()) >= kDenseCongruence * entries(M);
+    const bool x_lower = x_stored == Stored::Lower;
+    if (dense && x_lower)
+        return congruence(M, SparseMatrix(X.selfadjointView<Eigen::Lower>()), groups, Stored::Both);
+    if (dense && dense_congruence_fits(M, X)) return dense_congruence(M, X);
     const int bands =
         static_cast<double>(M.nonZeros()) <= kBandedCongruence * entries(M) ? kCongruenceBands : 1;
-    if (widest <= 8) return grouped_congruence<8>(M, X, groups, bands);
-    if (widest <= 16) return grouped_congruence<16>(M, X, groups, bands);
-    if (widest <= 24) return grouped_congruence<24>(M, X, groups, bands);
-    return grouped_congruence<kMaxGroup>(M, X, groups, bands);
+    if (widest <= 8) return grouped_congruence<8>(M, X, groups, bands, x_lower);
+    if (widest <= 16) return grouped_congruence<16>(M, X, groups, bands, x_lower);
+    if (widest <= 24) return grouped_congruence<24>(M, X, groups, bands, x_lower);
+    return grouped_congruence<kMaxGroup>(M, X, groups, bands, x_lower);
 }
 
 std::vector<IndexVector> consecutive_groups(Index n, Index size) {

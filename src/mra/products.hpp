@@ -31,7 +31,10 @@ SparseMatrix triple_product(const SparseMatrix& W, const SparseMatrix& A, const 
 /// (M + M^T) / 2, compressed, in M's storage when M is structurally symmetric (pass an rvalue).
 SparseMatrix symmetrized(SparseMatrix M);
 
-/// The lower triangle (diagonal included) of M X M^T for symmetric X (both triangles stored).
+/// How a symmetric matrix is stored: both triangles, or the lower one (diagonal included).
+enum class Stored { Both, Lower };
+
+/// The lower triangle (diagonal included) of M X M^T for symmetric X, stored as `x_stored` says.
 ///
 /// `groups` partitions the rows of M (the columns of the result) into groups of rows with
 /// nearby supports, e.g. node_blocks of the coarse level. Unless M is at least 30% dense (then
@@ -52,8 +55,12 @@ SparseMatrix symmetrized(SparseMatrix M);
 /// one pattern (a node's DOFs, see truncate_rows) is taken at once, so that each row of the
 /// accumulator is read and written once per run instead of once per column. Measurements of
 /// each kernel: docs/performance.md.
+/// X stored by its lower triangle L: the grouped kernel adds, per band of M's rows, the
+/// strictly upper entries of X in the columns those rows reach, read from L's rows there
+/// transposed (a band's share of L^T where M is local, e.g. W^k: B^k from the lower A^{k+1}
+/// without a copy with both triangles); the dense kernel takes a copy with both triangles.
 SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
-                        const std::vector<IndexVector>& groups);
+                        const std::vector<IndexVector>& groups, Stored x_stored = Stored::Both);
 
 /// Largest group congruence takes.
 constexpr Index kMaxGroup = 32;

@@ -865,16 +865,17 @@ class CellSum {
     SparseMatrix X_;
 };
 
-/// The operator of cell-wise localized solves: A (both triangles), plus penalty G^T G if G is
-/// given (G: measurements by A's unknowns, compressed), whose principal blocks are formed region
-/// by region (solve_operator_region), never whole. The relaxed coarser steps need that: their G
-/// measures the fine functions of level k+1, reaching about 7 of its nodes from a coarse node, so
-/// G^T G over a whole level is denser than A^{k+1} (the 24^3 checker's coarse step: 43M
-/// entries against A's 27M; at 40^3 the whole sum did not fit in 21 GB).
+/// The operator of cell-wise localized solves: A (both triangles, or with G its lower one), plus
+/// penalty G^T G if G is given (G: measurements by A's unknowns, compressed), whose principal
+/// blocks are formed region by region (solve_operator_region), never whole. The relaxed coarser
+/// steps need that: their G measures the fine functions of level k+1, reaching about 7 of its nodes
+/// from a coarse node, so G^T G over a whole level is denser than A^{k+1} (the 24^3 checker's
+/// coarse step: 43M entries against A's 27M; at 40^3 the whole sum did not fit in 21 GB).
 struct RegionOperator {
     const SparseMatrix& A;
     const SparseMatrix* G = nullptr;
     double penalty = 0;
+    Stored stored = Stored::Both;
 };
 
 /// Solves (A[S, S] + penalty G[:, S]^T G[:, S]) x = rhs (rhs in S's order; local[u]: the position
@@ -902,12 +903,16 @@ Matrix solve_penalized_region(const RegionOperator& op, const std::vector<Index>
         }
     for (const Index r : rows) position[static_cast<std::size_t>(r)] = -1;
     const Index nr = static_cast<Index>(rows.size());
-    const Index nnz = block_pattern(op.A, S, local).first;
+    // A lower A[S, S] (S sorted: its local order is the global one) holds the block's lower
+    // triangle, whose entries off its (full) diagonal stand for two.
+    const bool lower = op.stored == Stored::Lower;
+    const Index stored_nnz = block_pattern(op.A, S, local).first;
+    const Index nnz = lower ? 2 * stored_nnz - ns : stored_nnz;
     const double n = static_cast<double>(ns);
     const bool dense =
         ns <= kDenseLocalLimit || static_cast<double>(nnz) > kDenseLocalDensity * n * n ||
         static_cast<double>(g.size()) > kDenseLocalDensity * n * static_cast<double>(nr);
-    if (dense) {
+    if (dense) {  // the lower triangle is all that syrk_lower and DenseCholesky read
         Matrix m = Matrix::Zero(ns, ns);
         for (Index c = 0; c < ns; ++c)
             for (SparseMatrix::InnerIterator it(op.A, S[static_cast<std::size_t>(c)]); it; ++it)
@@ -921,7 +926,8 @@ Matrix solve_penalized_region(const RegionOperator& op, const std::vector<Index>
                   "mra: a local penalized system (n = {}) is not positive definite", ns);
         return llt.solve(rhs);
     }
-    principal_block(op.A, S, local, nnz, nullptr, scratch.b);
+    principal_block(op.A, S, local, stored_nnz, nullptr, scratch.b);
+    if (lower) scratch.b = SparseMatrix(scratch.b.selfadjointView<Eigen::Lower>());
     SparseMatrix gs(nr, ns);
     gs.setFromTriplets(g.begin(), g.end());
     const SparseMatrix m = scratch.b + op.penalty * SparseMatrix(SparseMatrix(gs.transpose()) * gs);
@@ -1065,9 +1071,12 @@ double soft_diagonal(const SparseMatrix& A, const StepGeometry& g) {
     return d;
 }
 
-/// The relaxed step's operator M = A + penalty G^T G (compressed).
-SparseMatrix penalized(const SparseMatrix& A, const SparseMatrix& G, double penalty) {
-    SparseMatrix M = A + penalty * product(SparseMatrix(G.transpose()), G);
+/// The relaxed step's operator M = A + penalty G^T G (compressed), stored as A is.
+SparseMatrix penalized(const SparseMatrix& A, const SparseMatrix& G, double penalty,
+                       Stored stored) {
+    SparseMatrix gram = product(SparseMatrix(G.transpose()), G);
+    if (stored == Stored::Lower) gram = gram.triangularView<Eigen::Lower>();
+    SparseMatrix M = A + penalty * gram;
     M.makeCompressed();
     return M;
 }
@@ -1100,16 +1109,19 @@ bool regions_span_level(const std::vector<CellStiffness>& parts, int rings, cons
 /// while the block stays small (27,783 by 256 doubles, 57 MB, at the 40^3 checker's coarse step).
 constexpr Index kWholeLevelColumns = 256;
 
-SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G, double penalty) {
+SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G, double penalty,
+                                    Stored a_stored) {
     CG_VERIFY(A.rows() == A.cols() && G.cols() == A.rows() && penalty > 0,
               "mra: step on the whole level with a {}x{} operator, {}x{} measurements and "
               "penalty {}",
               A.rows(), A.cols(), G.rows(), G.cols(), penalty);
-    solve::SpdSolver solver;
+    solve::SolverOptions options;
+    options.lower_triangle = a_stored == Stored::Lower;
+    solve::SpdSolver solver(options);
     try {
         solver.compute(A);
     } catch (const NotPositiveDefinite&) {
-        solver.compute(penalized(A, G, penalty));
+        solver.compute(penalized(A, G, penalty, a_stored));
     }
     // Y = A^{-1} G^T (or M^{-1} G^T) by blocks of kWholeLevelColumns columns, and C̃ = (G Y)^{-1}
     // Y^T in place: at most two dense #finer-by-#coarser blocks are alive at once (Y and Y^T while
@@ -1120,7 +1132,7 @@ SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G
         const Index c = std::min<Index>(kWholeLevelColumns, G.rows() - c0);
         Y.middleCols(c0, c) = solver.solve(Matrix(Gt.middleCols(c0, c)));
     }
-    solver = solve::SpdSolver();
+    solver = solve::SpdSolver(options);
     solve::DenseCholesky GY;
     CG_VERIFY(GY.compute(sparse_times_dense(G, Y)) == 0,
               "mra: step on the whole level: G A^-1 G^T ({} measurements) is not definite: the "
@@ -1137,7 +1149,8 @@ SparseMatrix whole_level_refinement(const SparseMatrix& A, const SparseMatrix& G
 SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatrix& C,
                                         const SparseMatrix& G, const SparseMatrix& Phi,
                                         const std::vector<CellStiffness>& parts,
-                                        const StepGeometry& g, int rings, double relaxation) {
+                                        const StepGeometry& g, int rings, double relaxation,
+                                        Stored a_stored) {
     const int dim = g.dim;
     const Eigen::Vector3i nf = node_counts(g.fine_cells, dim);
     const std::vector<Index> fine_local = fine_local_index(g);
@@ -1171,12 +1184,13 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     // Every region spanning the level: the step on the whole level, in the basis of the
     // measurements G, without the parts' right-hand sides or C Φ (on a coarse level the sum over
     // the parts' fine elements costs more than the step).
-    if (regions_span_level(parts, rings, g)) return whole_level_refinement(A, G, penalty);
+    if (regions_span_level(parts, rings, g)) return whole_level_refinement(A, G, penalty, a_stored);
     CG_ASSERT(Phi.rows() == A.rows(), "mra: relaxed step without its fine functions");
     // The sum A + penalty G^T G formed whole where it stays within a few times A's size (its
     // product's work, sum_r nnz(G[r, :])^2, a bound on G^T G's entries, at most 4 times A's: the
     // finest step, where G = C^{q-1}, about 1.4x on the 24^3 checker), else region by region (its
-    // coarse step: 260x).
+    // coarse step: 260x), as it is from a lower A (the region solves take both triangles of a
+    // whole sum).
     std::vector<double> row_entries(static_cast<std::size_t>(G.rows()), 0.0);
     for (Index j = 0; j < G.outerSize(); ++j)
         for (SparseMatrix::InnerIterator it(G, j); it; ++it)
@@ -1185,10 +1199,11 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
         std::inner_product(row_entries.begin(), row_entries.end(), row_entries.begin(), 0.0);
     const Index unknowns = static_cast<Index>(A.rows());
     const SparseMatrix CPhi = product(C, Phi);
-    if (gram_work <= 4.0 * static_cast<double>(A.nonZeros()))
-        return cell_corrections({penalized(A, G, penalty)}, unknowns, interior, Phi, CPhi, C, parts,
-                                g, rings);
-    return cell_corrections({A, &G, penalty}, unknowns, interior, Phi, CPhi, C, parts, g, rings);
+    if (a_stored == Stored::Both && gram_work <= 4.0 * static_cast<double>(A.nonZeros()))
+        return cell_corrections({penalized(A, G, penalty, a_stored)}, unknowns, interior, Phi, CPhi,
+                                C, parts, g, rings);
+    return cell_corrections({A, &G, penalty, a_stored}, unknowns, interior, Phi, CPhi, C, parts, g,
+                            rings);
 }
 
 SparseMatrix rigid_left_inverse(const SparseMatrix& C, const SparseMatrix& C_dagger,

@@ -32,24 +32,33 @@ std::vector<IndexVector> consecutive_groups(Index rows) {
     return groups;
 }
 
+/// X as congruence reads it when stored as `stored`: itself or its lower triangle, compressed.
+SparseMatrix stored_as(const SparseMatrix& X, Stored stored) {
+    SparseMatrix S = stored == Stored::Lower ? SparseMatrix(X.triangularView<Eigen::Lower>()) : X;
+    S.makeCompressed();  // as the library's operators (the kernels read raw CSC arrays)
+    return S;
+}
+
 // M 60% dense takes the dense kernel, with X dense (50%) or sparse (1%: M X by columns of X,
-// times_sparse); M 5% dense the grouped one. Every kernel sums the same products in
-// another order: 1e-13 relative.
+// times_sparse); M 5% dense the grouped one. X with both triangles or its lower one. Every
+// kernel sums the same products in another order: 1e-13 relative.
 TEST(MraCongruence, EveryKernelIsTheGalerkinProduct) {
     const Index m = 600, n = 300;  // m above the dense kernel's 512-column blocks
-    for (const double m_density : {0.6, 0.05})
-        for (const double x_density : {0.5, 0.01}) {
-            const SparseMatrix half = random_sparse(n, n, x_density / 2, 7);
-            SparseMatrix X = SparseMatrix(half + SparseMatrix(half.transpose()));
-            for (Index i = 0; i < n; ++i) X.coeffRef(i, i) += 1.0;
-            X.makeCompressed();  // as the library's operators (the kernels read raw CSC arrays)
-            const SparseMatrix M = random_sparse(m, n, m_density, 11);
-            const SparseMatrix A = congruence(M, X, consecutive_groups(m));
-            const Matrix expected = Matrix(M) * Matrix(X) * Matrix(M).transpose();
-            const Matrix lower = expected.triangularView<Eigen::Lower>();
-            EXPECT_LT((Matrix(A) - lower).norm(), 1e-13 * expected.norm())
-                << "M " << m_density << ", X " << x_density;
-        }
+    for (const Stored stored : {Stored::Both, Stored::Lower})
+        for (const double m_density : {0.6, 0.05})
+            for (const double x_density : {0.5, 0.01}) {
+                const SparseMatrix half = random_sparse(n, n, x_density / 2, 7);
+                SparseMatrix X = SparseMatrix(half + SparseMatrix(half.transpose()));
+                for (Index i = 0; i < n; ++i) X.coeffRef(i, i) += 1.0;
+                const SparseMatrix M = random_sparse(m, n, m_density, 11);
+                const SparseMatrix A =
+                    congruence(M, stored_as(X, stored), consecutive_groups(m), stored);
+                const Matrix expected = Matrix(M) * Matrix(X) * Matrix(M).transpose();
+                const Matrix lower = expected.triangularView<Eigen::Lower>();
+                EXPECT_LT((Matrix(A) - lower).norm(), 1e-13 * expected.norm())
+                    << "M " << m_density << ", X " << x_density << ", lower "
+                    << (stored == Stored::Lower);
+            }
 }
 
 // A sparse M (at most 5% dense) is read through bands of its rows, transposed one at a time.
@@ -57,7 +66,9 @@ TEST(MraCongruence, EveryKernelIsTheGalerkinProduct) {
 // the groups are like a grid's node blocks: two runs of 4 rows, `stride` rows apart, so that a
 // band's groups reach into the next band's rows. Groups read their band's rows by rows where
 // most of those rows' entries meet their product with X, by columns else, and the rows past
-// their band by columns (leaving those out fails both cases). Same sums in another order: 1e-13.
+// their band by columns (leaving those out fails both cases). X with both triangles or its lower
+// one, whose strictly upper entries each band reads from the transposed rows of X it reaches.
+// Same sums in another order: 1e-13.
 TEST(MraCongruence, SparseRowsAreReadBandByBand) {
     const Index m = 1200, n = 1500, width = 20, stride = 60;
     std::mt19937 rng(5);
@@ -82,15 +93,62 @@ TEST(MraCongruence, SparseRowsAreReadBandByBand) {
             }
             groups.push_back(J);
         }
-    for (const double x_density : {0.5, 0.01}) {
-        const SparseMatrix half = random_sparse(n, n, x_density / 2, 7);
-        SparseMatrix X = SparseMatrix(half + SparseMatrix(half.transpose()));
-        for (Index i = 0; i < n; ++i) X.coeffRef(i, i) += 1.0;
-        X.makeCompressed();
-        const SparseMatrix A = congruence(M, X, groups);
+    for (const Stored stored : {Stored::Both, Stored::Lower})
+        for (const double x_density : {0.5, 0.01}) {
+            const SparseMatrix half = random_sparse(n, n, x_density / 2, 7);
+            SparseMatrix X = SparseMatrix(half + SparseMatrix(half.transpose()));
+            for (Index i = 0; i < n; ++i) X.coeffRef(i, i) += 1.0;
+            const SparseMatrix A = congruence(M, stored_as(X, stored), groups, stored);
+            const Matrix expected = Matrix(M) * Matrix(X) * Matrix(M).transpose();
+            const Matrix lower = expected.triangularView<Eigen::Lower>();
+            EXPECT_LT((Matrix(A) - lower).norm(), 1e-13 * expected.norm())
+                << "X " << x_density << ", lower " << (stored == Stored::Lower);
+        }
+}
+
+// X of 3x3 node blocks (an interleaved operator: a node's three columns share their rows) and M
+// whose columns come in nodes too (C̃'s pattern): a node's columns are taken at once, from X with
+// both triangles, from its lower triangle and from that one's transposed rows (whose node blocks
+// are triangular: each column's rows in its own node are taken alone). M 1.6% dense (read by
+// bands) and 10% (one band); against the dense product, 1e-13 relative.
+TEST(MraCongruence, NodeColumnsAreTakenTogetherInEveryStorage) {
+    const Index nodes = 400, n = 3 * nodes, m = 600;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> value(-1.0, 1.0), coin(0.0, 1.0);
+    std::vector<Eigen::Triplet<double, Index>> x;
+    for (Index a = 0; a < nodes; ++a)
+        for (Index b = std::max<Index>(0, a - 6); b <= a; ++b) {
+            if (b < a && coin(rng) < 0.5) continue;
+            for (Index i = 0; i < 3; ++i)
+                for (Index j = 0; j < 3; ++j) {
+                    if (a == b && j > i) continue;
+                    const double v = a == b && i == j ? 20.0 : value(rng);
+                    x.emplace_back(3 * a + i, 3 * b + j, v);
+                    if (a != b || i != j) x.emplace_back(3 * b + j, 3 * a + i, v);
+                }
+        }
+    SparseMatrix X(n, n);
+    X.setFromTriplets(x.begin(), x.end());
+    for (const Index width : {4, 40}) {
+        std::vector<Eigen::Triplet<double, Index>> t;
+        for (Index i = 0; i < m; ++i) {
+            const Index centre = i * nodes / m;
+            for (Index b = std::max<Index>(0, centre - width); b < std::min(nodes, centre + width);
+                 ++b)
+                if (coin(rng) < 0.5)
+                    for (Index d = 0; d < 3; ++d) t.emplace_back(i, 3 * b + d, value(rng));
+        }
+        SparseMatrix M(m, n);
+        M.setFromTriplets(t.begin(), t.end());
         const Matrix expected = Matrix(M) * Matrix(X) * Matrix(M).transpose();
         const Matrix lower = expected.triangularView<Eigen::Lower>();
-        EXPECT_LT((Matrix(A) - lower).norm(), 1e-13 * expected.norm()) << "X " << x_density;
+        for (const Stored stored : {Stored::Both, Stored::Lower}) {
+            const SparseMatrix A =
+                congruence(M, stored_as(X, stored), consecutive_groups(m), stored);
+            EXPECT_LT((Matrix(A) - lower).norm(), 1e-13 * expected.norm())
+                << "M " << static_cast<double>(M.nonZeros()) / (m * n) << " dense, lower "
+                << (stored == Stored::Lower);
+        }
     }
 }
 

@@ -43,7 +43,7 @@ SparseMatrix dense_measurements(const SparseMatrix& C, int dense_rows, double de
 
 struct RegionCase {
     int dim;
-    int dense_rows;  ///< rows of G given random entries (-1: all)
+    int dense_rows;  ///< rows of G given random entries (-1: all; 0: G = C, of Dirac refinement)
     double density;  ///< the fraction of their columns that get one
     int rings;
 };
@@ -58,7 +58,10 @@ class MraRelaxedRegions : public ::testing::TestWithParam<RegionCase> {};
 TEST_P(MraRelaxedRegions, PenalizedBlocksFormedByRegionEqualTheSumFormedWhole) {
     // The same regions, right-hand sides and local systems; only where A + p G^T G is formed
     // differs: gathered per region (G[:, S]^T G[:, S] by BLAS dsyrk on small or dense blocks, by
-    // a sparse product on sparse ones) or whole by a sparse product. The densities are chosen so
+    // a sparse product on sparse ones) or whole by a sparse product, or by region from A's lower
+    // triangle (dense blocks read only their lower triangles, sparse ones are mirrored: with the
+    // Dirac refinement's measurements, G^T G is diagonal and the regions' systems are sparse
+    // enough for CHOLMOD, which reads them in a fill-reducing order). The densities are chosen so
     // that G^T G's work bound, sum_r nnz(G[r, :])^2, lies between 4 nnz(A) and 4 #unknowns^2:
     // above the first A gets the blocks by region, below the second its full pattern gets the
     // whole sum. 1 ring: regions of at most 100 unknowns, the dense branch; 2 rings in 3D: up to
@@ -76,11 +79,12 @@ TEST_P(MraRelaxedRegions, PenalizedBlocksFormedByRegionEqualTheSumFormedWhole) {
     g.coarse_dofs = IndexVector::LinSpaced(dim * grid_nodes(g.coarse_cells, dim), 0,
                                            dim * grid_nodes(g.coarse_cells, dim) - 1);
     const SparseMatrix A = fem::reduce(p.K, p.f, p.bc).K;
+    const Refinement refinement = dense_rows == 0 ? Refinement::Dirac : Refinement::Linear;
     const SparseMatrix C_all =
-        expand_to_dofs(canonical_refinement(g.coarse_cells, dim, Refinement::Linear), dim);
+        expand_to_dofs(canonical_refinement(g.coarse_cells, dim, refinement), dim);
     SparseMatrix C(C_all.rows(), g.fine_dofs.size());
     for (Index l = 0; l < g.fine_dofs.size(); ++l) C.col(l) = C_all.col(g.fine_dofs[l]);
-    const SparseMatrix G = dense_measurements(C, dense_rows, density);
+    const SparseMatrix G = dense_rows == 0 ? C : dense_measurements(C, dense_rows, density);
     SparseMatrix Phi(A.rows(), A.rows());
     Phi.setIdentity();
     const std::vector<CellStiffness> parts = cell_stiffness(
@@ -89,20 +93,25 @@ TEST_P(MraRelaxedRegions, PenalizedBlocksFormedByRegionEqualTheSumFormedWhole) {
     const Matrix by_region(relaxed_adapted_refinement(A, C, G, Phi, parts, g, rings, 3.0));
     const Matrix whole(
         relaxed_adapted_refinement(with_full_pattern(A), C, G, Phi, parts, g, rings, 3.0));
+    const SparseMatrix A_lower = A.triangularView<Eigen::Lower>();
+    const Matrix by_region_lower(
+        relaxed_adapted_refinement(A_lower, C, G, Phi, parts, g, rings, 3.0, Stored::Lower));
     EXPECT_GT(by_region.norm(), 0.0);
     EXPECT_LT((by_region - whole).norm(), 1e-12 * whole.norm());
+    EXPECT_LT((by_region_lower - by_region).norm(), 1e-12 * by_region.norm());
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, MraRelaxedRegions,
                          ::testing::Values(RegionCase{2, -1, 0.1, 1}, RegionCase{2, -1, 0.1, 2},
                                            RegionCase{3, -1, 0.08, 1}, RegionCase{3, -1, 0.08, 2},
-                                           RegionCase{3, 2, 0.5, 2}),
+                                           RegionCase{3, 2, 0.5, 2}, RegionCase{3, 0, 0.0, 2}),
                          [](const auto& param) {
                              const RegionCase& c = param.param;
                              return std::to_string(c.dim) + "D_" +
-                                    (c.dense_rows < 0 ? std::string("all")
-                                                      : std::to_string(c.dense_rows)) +
-                                    "_rows_" + std::to_string(c.rings) + "_rings";
+                                    (c.dense_rows < 0    ? std::string("all_rows")
+                                     : c.dense_rows == 0 ? std::string("dirac")
+                                                         : std::to_string(c.dense_rows) + "_rows") +
+                                    "_" + std::to_string(c.rings) + "_rings";
                          });
 
 }  // namespace

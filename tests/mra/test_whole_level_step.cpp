@@ -82,7 +82,8 @@ Matrix constrained_minimizer(const SparseMatrix& A, const SparseMatrix& G) {
 // accurate to about cond(A) eps = 2e-11; the KKT system's LU to about its condition times eps.
 // 1e-10 relative. Measurements sparse (C's pattern: the column-by-column product of
 // sparse_times_dense) and 40% dense (its dense copy). Free, A's null space (the constants) makes
-// it singular and the step goes through M (penalties 0.1 and 100 around the stiffnesses).
+// it singular and the step goes through M (penalties 0.1 and 100 around the stiffnesses). A given
+// by its lower triangle gives the same step.
 TEST(MraWholeLevelStep, IsTheConstrainedMinimizerWithAndWithoutDirichletConditions) {
     const SparseMatrix C = interpolation(13, 5);
     for (const bool held : {true, false})
@@ -92,6 +93,11 @@ TEST(MraWholeLevelStep, IsTheConstrainedMinimizerWithAndWithoutDirichletConditio
                 const SparseMatrix G = perturbed(C, density, 0.2, 7);
                 const Matrix Ct(whole_level_refinement(A, G, p));
                 const Matrix expected = constrained_minimizer(A, G);
+                // A by its lower triangle: the same factorizations, to round-off.
+                const SparseMatrix A_lower = A.triangularView<Eigen::Lower>();
+                EXPECT_LT(
+                    (Matrix(whole_level_refinement(A_lower, G, p, Stored::Lower)) - Ct).norm(),
+                    1e-12 * Ct.norm());
                 ASSERT_EQ(Ct.rows(), G.rows());
                 ASSERT_EQ(Ct.cols(), G.cols());
                 const std::string label = std::string(held ? "held" : "free") + ", density " +
