@@ -855,8 +855,8 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             // The relaxed solves do not read B^k, which is made as it is kept (its lower
             // triangle) after them, through which it was held (the 56^3 checker, 3 levels, 4
             // fine rings: the coarse step's peak 17.5 -> 12.6 GB), from the fine operator or
-            // the lower triangle of A^{k+1} (64^3 checker, 3 levels: B^1's peak 21.2 GB beside
-            // A^2 with both triangles).
+            // the lower triangle of A^{k+1} (the 64^3 checker, 3 levels: B^1's peak 21.2 GB
+            // beside A^2 with both triangles).
             const Phase phase(tag + "B", &h.timings);
             const auto wavelets = detail::consecutive_groups(L.W.rows(), 8 * dim);
             L.B = k + 1 == q

@@ -326,9 +326,11 @@ bool same_rows_outside(const SparseMatrix& S, Index a, Index b, Index first, Ind
 /// outside the run's own rows [offset + s, offset + s + length): a node's DOFs in an interleaved
 /// symmetric matrix stored whole, by its lower triangle or as the transposed rows of that (the
 /// node's own block is triangular in the last two), and in C̃ (see truncate_rows). Run r is
-/// columns [start[r], start[r + 1]), and column f is in run run_of[f].
+/// columns [start[r], start[r + 1]), column f is in run run_of[f], and uniform[r] says whether
+/// the run's columns have one pattern, their own rows included.
 struct ColumnRuns {
     std::vector<Index> start{0}, run_of;
+    std::vector<char> uniform;
 
     explicit ColumnRuns(const SparseMatrix& S, Index offset = 0)
         : run_of(static_cast<std::size_t>(S.cols())) {
@@ -337,18 +339,23 @@ struct ColumnRuns {
                 !same_rows_outside(S, start.back(), j, offset + start.back(), offset + j + 1))
                 start.push_back(j);
         start.push_back(S.cols());
-        for (std::size_t r = 0; r + 1 < start.size(); ++r)
+        uniform.assign(start.size() - 1, 1);
+        for (std::size_t r = 0; r + 1 < start.size(); ++r) {
             std::fill(run_of.begin() + start[r], run_of.begin() + start[r + 1],
                       static_cast<Index>(r));
+            for (Index j = start[r] + 1; j < start[r + 1]; ++j)
+                uniform[r] = uniform[r] && same_rows_outside(S, start[r], j, 0, 0);
+        }
     }
 };
 
 /// acc[i, :] += sum_t S[i, s + t] rows[offset + s + t, :] over the L columns s.. of one run of
 /// S, from row `first_row` of S on: each row of acc is read and written once per run instead of
 /// once per column (the kernel streams acc's rows; on the 64^3 Galerkin product that traffic
-/// dominates), but the run's own rows [offset + s, offset + s + L), column by column.
+/// dominates); unless the run is `uniform`, its own rows [offset + s, offset + s + L) column by
+/// column.
 template <int W, int L>
-void accumulate_run(const SparseMatrix& S, Index s, const RowAccumulator<W>& rows,
+void accumulate_run(const SparseMatrix& S, Index s, bool uniform, const RowAccumulator<W>& rows,
                     RowAccumulator<W>& acc, Index first_row, Index offset) {
     const Index* outer = S.outerIndexPtr();
     const Index* inner = S.innerIndexPtr();
@@ -360,10 +367,11 @@ void accumulate_run(const SparseMatrix& S, Index s, const RowAccumulator<W>& row
     for (int t = 0; t < L; ++t) {
         const Index *b = inner + outer[s + t], *e = inner + outer[s + t + 1];
         const Index* from = std::lower_bound(b, e, first_row);
-        const Index* in = std::lower_bound(from, e, offset + s);
+        const Index* in = uniform ? e : std::lower_bound(from, e, offset + s);
         begin[t] = from - inner;
         inside[t] = in - inner;
-        after[t] = std::lower_bound(in, e, std::max(first_row, offset + s + L)) - inner;
+        after[t] = uniform ? inside[t]
+                           : std::lower_bound(in, e, std::max(first_row, offset + s + L)) - inner;
         p[t] = rows.existing_row(offset + s + t);
     }
     const auto joint = [&](const Index* at, Index count) {
@@ -399,12 +407,13 @@ void accumulate(const SparseMatrix& S, const ColumnRuns& runs, const RowAccumula
         const Index length = runs.start[static_cast<std::size_t>(r) + 1] - s;
         bool whole = length > 1;
         for (Index t = s; whole && t < s + length; ++t) whole = rows.has(offset + t);
+        const bool uniform = runs.uniform[static_cast<std::size_t>(r)];
         if (!whole)
-            accumulate_run<W, 1>(S, f, rows, acc, first_row, offset);
+            accumulate_run<W, 1>(S, f, true, rows, acc, first_row, offset);
         else if (f == s && length == 2)
-            accumulate_run<W, 2>(S, s, rows, acc, first_row, offset);
+            accumulate_run<W, 2>(S, s, uniform, rows, acc, first_row, offset);
         else if (f == s)
-            accumulate_run<W, 3>(S, s, rows, acc, first_row, offset);
+            accumulate_run<W, 3>(S, s, uniform, rows, acc, first_row, offset);
     }
 }
 
@@ -630,11 +639,11 @@ SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& X,
     const Index m = M.rows(), n = M.cols();
     const ColumnRuns m_runs(M), x_runs(X);
     ColumnStore store(m, m, omp_get_max_threads());
+    SparseMatrix Mt, X_upper;  // the band's, each freed for the next; the last one's released
     for (const RowBand& band : row_bands(M, groups, bands)) {
-        SparseMatrix Mt = transposed_rows(M, band.first, band.last);
+        Mt = transposed_rows(M, band.first, band.last);
         const auto [reach_first, reach_last] = x_lower ? reached_columns(Mt) : std::pair{n, n};
-        SparseMatrix X_upper =
-            x_lower ? transposed_rows(X, reach_first, reach_last, true) : SparseMatrix(n, 0);
+        X_upper = x_lower ? transposed_rows(X, reach_first, reach_last, true) : SparseMatrix(n, 0);
         const ColumnRuns upper_runs(X_upper, reach_first);
         const auto n_groups = static_cast<Index>(band.groups.size());
 #pragma omp parallel if (n_groups > 1)
@@ -671,9 +680,9 @@ SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& X,
                 result.clear();
             }
         }
-        release_entries(Mt);
-        release_entries(X_upper);
     }
+    release_entries(Mt);
+    release_entries(X_upper);
     return store.take();
 }
 
