@@ -188,7 +188,7 @@ struct Options {
     /// localized solves B^k is the largest matrix of a step (5.5e7 entries in the fine step of
     /// a 48^3 hex grid at radius 1, twice A^{k+1}) and the cycle does not read it. Neither do the
     /// coarse model and its solves: B^1 of the 64^3 checker with 3 levels, `radius` [3, 4],
-    /// holds 3.5e8 entries (4.2 GB; the build peaks at 17.2 GB with it).
+    /// holds 3.5e8 entries (4.2 GB; the build peaks at 17.6 GB with it).
     bool store_wavelet_stiffness = true;
     /// The fine element (the scene's "fem" block), for the element matrices the construction
     /// computes itself: the cell-localized solves' A_T and the coarsest cells' own hierarchies.
