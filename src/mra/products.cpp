@@ -642,8 +642,11 @@ SparseMatrix grouped_congruence(const SparseMatrix& M, const SparseMatrix& X,
     SparseMatrix Mt, X_upper;  // the band's, each freed for the next; the last one's released
     for (const RowBand& band : row_bands(M, groups, bands)) {
         Mt = transposed_rows(M, band.first, band.last);
-        const auto [reach_first, reach_last] = x_lower ? reached_columns(Mt) : std::pair{n, n};
-        X_upper = x_lower ? transposed_rows(X, reach_first, reach_last, true) : SparseMatrix(n, 0);
+        // Named, not bound: clang 14 cannot capture structured bindings (the parallel region).
+        const std::pair<Index, Index> reach = x_lower ? reached_columns(Mt) : std::pair{n, n};
+        const Index reach_first = reach.first;
+        X_upper =
+            x_lower ? transposed_rows(X, reach_first, reach.second, true) : SparseMatrix(n, 0);
         const ColumnRuns upper_runs(X_upper, reach_first);
         const auto n_groups = static_cast<Index>(band.groups.size());
 #pragma omp parallel if (n_groups > 1)
