@@ -843,10 +843,10 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
             const Phase phase(tag + "A", &h.timings);
             L.A = detail::congruence(Ct, A, dof_groups(h, L), A_next_stored);
         }
-        // A^{k+1} (not the fine operator) is kept as its lower triangle from here on, in the
-        // storage of its copy with both triangles, before B^k is formed and C̃^{q-1} may be
-        // stored as runs below, beside its sparse form (48^3 checker, 3 levels, coarse step in
-        // rings: the build's peak 23.5 GB with both held there).
+        // A^{k+1} read with both triangles (not the fine operator) is kept as its lower triangle
+        // from here on, in the storage of that copy, before C̃^{q-1} may be stored as runs below,
+        // beside its sparse form (48^3 checker, 3 levels, coarse step in rings: the build's peak
+        // 23.5 GB with both held there).
         if (k + 1 < q && A_next_stored == detail::Stored::Both) {
             h.levels[static_cast<std::size_t>(k)].A = lower_in_place(std::move(A_full));
             A_full = SparseMatrix();
@@ -854,14 +854,11 @@ Hierarchy build(const mesh::Mesh& mesh, const std::vector<mesh::Mesh>* meshes,
         if (relaxed && options.store_wavelet_stiffness) {
             // The relaxed solves do not read B^k, which is made as it is kept (its lower
             // triangle) after them, through which it was held (the 56^3 checker, 3 levels, 4
-            // fine rings: the coarse step's peak 17.5 -> 12.6 GB), from the fine operator or
-            // the lower triangle of A^{k+1} (the 64^3 checker, 3 levels: B^1's peak 21.2 GB
-            // beside A^2 with both triangles).
+            // fine rings: the coarse step's peak 17.5 -> 12.6 GB), from A^{k+1} as the step read
+            // it (the 64^3 checker, 3 levels: B^1's peak 21.2 GB beside A^2 with both triangles).
             const Phase phase(tag + "B", &h.timings);
-            const auto wavelets = detail::consecutive_groups(L.W.rows(), 8 * dim);
-            L.B = k + 1 == q
-                      ? detail::congruence(L.W, A, wavelets)
-                      : detail::congruence(L.W, h.level(k + 1).A, wavelets, detail::Stored::Lower);
+            L.B = detail::congruence(L.W, A, detail::consecutive_groups(L.W.rows(), 8 * dim),
+                                     A_next_stored);
         }
         if (options.store_bases) {
             const Phase phase(tag + "Phi Psi", &h.timings);

@@ -13,6 +13,7 @@
 
 #include "coarsegrain/common/allocator.hpp"
 #include "coarsegrain/common/error.hpp"
+#include "coarsegrain/mra/hierarchy.hpp"
 #include "coarsegrain/mra/refinement.hpp"
 #include "coarsegrain/solve/spd_solver.hpp"
 
@@ -800,8 +801,7 @@ SparseMatrix congruence(const SparseMatrix& M, const SparseMatrix& X,
               M.rows(), widest, kMaxGroup);
     const bool dense = static_cast<double>(M.nonZeros()) >= kDenseCongruence * entries(M);
     const bool x_lower = x_stored == Stored::Lower;
-    if (dense && x_lower)
-        return congruence(M, SparseMatrix(X.selfadjointView<Eigen::Lower>()), groups, Stored::Both);
+    if (dense && x_lower) return congruence(M, symmetric_from_lower(X), groups, Stored::Both);
     if (dense && dense_congruence_fits(M, X)) return dense_congruence(M, X);
     const int bands =
         static_cast<double>(M.nonZeros()) <= kBandedCongruence * entries(M) ? kCongruenceBands : 1;

@@ -1189,8 +1189,8 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     // The sum A + penalty G^T G formed whole where it stays within a few times A's size (its
     // product's work, sum_r nnz(G[r, :])^2, a bound on G^T G's entries, at most 4 times A's: the
     // finest step, where G = C^{q-1}, about 1.4x on the 24^3 checker), else region by region (its
-    // coarse step: 260x), as it is from a lower A (the region solves take both triangles of a
-    // whole sum).
+    // coarse step: 260x), and always from a lower A (solve_region reads a whole sum's blocks with
+    // both triangles).
     std::vector<double> row_entries(static_cast<std::size_t>(G.rows()), 0.0);
     for (Index j = 0; j < G.outerSize(); ++j)
         for (SparseMatrix::InnerIterator it(G, j); it; ++it)
@@ -1200,8 +1200,8 @@ SparseMatrix relaxed_adapted_refinement(const SparseMatrix& A, const SparseMatri
     const Index unknowns = static_cast<Index>(A.rows());
     const SparseMatrix CPhi = product(C, Phi);
     if (a_stored == Stored::Both && gram_work <= 4.0 * static_cast<double>(A.nonZeros()))
-        return cell_corrections({penalized(A, G, penalty, a_stored)}, unknowns, interior, Phi, CPhi,
-                                C, parts, g, rings);
+        return cell_corrections({penalized(A, G, penalty, Stored::Both)}, unknowns, interior, Phi,
+                                CPhi, C, parts, g, rings);
     return cell_corrections({A, &G, penalty, a_stored}, unknowns, interior, Phi, CPhi, C, parts, g,
                             rings);
 }
