@@ -96,7 +96,8 @@ nlohmann::json coarsest_cells_json(const mra::CoarsestCellsReport& r) {
             {"per_cell", per_cell}};
 }
 
-/// The fields of one level's diagnostics (the CSV columns plus spectrum_note; NaN is null).
+/// The fields of one level's diagnostics (the CSV columns plus solve_note and spectrum_note; NaN
+/// is null).
 nlohmann::json level_json(const mra::LevelDiagnostics& L) {
     const auto number = [](double v) {
         return std::isnan(v) ? nlohmann::json() : nlohmann::json(v);
@@ -106,6 +107,7 @@ nlohmann::json level_json(const mra::LevelDiagnostics& L) {
             {"wavelets", L.wavelets},
             {"error_over_g", number(L.error_over_g)},
             {"error_over_u", number(L.error_over_u)},
+            {"solve_note", L.solve_note},
             {"lambda_min_A", number(L.lambda_min_A)},
             {"lambda_max_A", number(L.lambda_max_A)},
             {"cond_A", number(L.cond_A)},

@@ -265,9 +265,9 @@ coarsen::FineComparison compare_levels(const Hierarchy& h, const scene::FineMode
     coarsen::FineComparison c;
     ComparisonReport report;
     for (int k = 1; k <= q; ++k)
-        c.reconstructions.push_back({fmt::format("level_{}", k),
-                                     d.solutions[static_cast<std::size_t>(k - 1)],
-                                     static_cast<std::size_t>(k - 1)});
+        if (const Vector& u_k = d.solutions[static_cast<std::size_t>(k - 1)]; u_k.size() > 0)
+            c.reconstructions.push_back(
+                {fmt::format("level_{}", k), u_k, static_cast<std::size_t>(k - 1)});
     c.tables.push_back(levels_table(d));
     add_coarsest_cells(h, fine, d.solutions.front(), d.solutions.back(), options.cell_tensors,
                        report.coarsest_cells, c);

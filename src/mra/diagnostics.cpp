@@ -100,6 +100,19 @@ double symmetric_sparsity(const SparseMatrix& lower) {
     return size > 0 ? 1.0 - static_cast<double>(symmetric_nonzeros(lower)) / size : 0.0;
 }
 
+/// u^k of level k < q by `solver`, or, for 1 < k < q whose factorization is refused for its
+/// size, an empty vector with the reason in L.solve_note.
+Vector level_solution(MultilevelSolver& solver, const Vector& g_fine, int k, int q,
+                      LevelDiagnostics& L) {
+    try {
+        return solver.solve_level(g_fine, k);
+    } catch (const solve::FactorTooLarge& e) {
+        if (k == 1 || k == q) throw;
+        L.solve_note = fmt::format("level {} not solved: {}", k, e.what());
+        return {};
+    }
+}
+
 }  // namespace
 
 Spectrum extreme_eigenvalues(const SparseMatrix& A) {
@@ -144,7 +157,7 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
     const int q = h.num_levels();
     const double g_norm = restrict_to(g_fine, h.fine_dofs).norm();
     CG_VERIFY(g_norm > 0, "mra diagnostics: the load is zero on the hierarchy's DOFs");
-    MultilevelSolver solver(h);
+    MultilevelSolver solver(h, options.max_factor_bytes);
     const bool penalized = h.options.dirichlet == DirichletTreatment::Penalty ||
                            h.options.dirichlet == DirichletTreatment::DiagonalPenalty;
     CG_VERIFY(!options.fine_solution || !penalized,
@@ -169,10 +182,14 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
         L.k = k;
         const SparseMatrix& A = k == q ? h.A_fine : h.level(k).A;
         L.dofs = A.rows();
-        Vector u_k = k == q ? u_grid : solver.solve_level(g_fine, k);
-        const Vector e = restrict_to(u_k, h.fine_dofs) - u;
-        L.error_over_g = energy_norm(h.A_fine, e) / g_norm;
-        L.error_over_u = energy_norm(h.A_fine, e) / u_norm;
+        Vector u_k = k == q ? u_grid : level_solution(solver, g_fine, k, q, L);
+        if (u_k.size() > 0) {
+            const Vector e = restrict_to(u_k, h.fine_dofs) - u;
+            L.error_over_g = energy_norm(h.A_fine, e) / g_norm;
+            L.error_over_u = energy_norm(h.A_fine, e) / u_norm;
+        } else {
+            L.error_over_g = L.error_over_u = nan;
+        }
         if (options.keep_solutions) d.solutions.push_back(std::move(u_k));
         const bool lower = k < q;  // Level::A is stored as its lower triangle, A_fine whole
         // The spectrum of the operator the level's solves factorize (boundary-blind levels:

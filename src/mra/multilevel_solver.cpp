@@ -4,8 +4,9 @@
 
 namespace coarsegrain::mra {
 
-MultilevelSolver::MultilevelSolver(const Hierarchy& h)
+MultilevelSolver::MultilevelSolver(const Hierarchy& h, double max_factor_bytes)
     : m_h(h),
+      m_max_factor_bytes(max_factor_bytes),
       m_A(static_cast<std::size_t>(h.num_levels())),
       m_B(static_cast<std::size_t>(h.num_levels() - 1)) {}
 
@@ -19,12 +20,15 @@ void MultilevelSolver::factorize_level(int k) {
     if (s) return;
     const bool fine = k == m_h.num_levels();
     solve::SolverOptions options;
+    options.max_factor_bytes = m_max_factor_bytes;
     options.lower_triangle = !fine;  // Level::A holds the lower triangle of A^k
-    s = std::make_unique<solve::SpdSolver>(options);
+    // Kept only once factorized: a refused or failed factorization is tried again on next use.
+    auto solver = std::make_unique<solve::SpdSolver>(options);
     if (fixed_positions(m_h, k).size() > 0)
-        s->compute(free_operator(m_h, k));
+        solver->compute(free_operator(m_h, k));
     else
-        s->compute(fine ? m_h.A_fine : m_h.level(k).A);
+        solver->compute(fine ? m_h.A_fine : m_h.level(k).A);
+    s = std::move(solver);
 }
 
 const solve::SpdSolver& MultilevelSolver::factorization(int k) {
@@ -46,9 +50,11 @@ void MultilevelSolver::factorize_wavelets(int k) {
     auto& s = m_B[static_cast<std::size_t>(k - 1)];
     if (s) return;
     solve::SolverOptions options;
+    options.max_factor_bytes = m_max_factor_bytes;
     options.lower_triangle = true;  // Level::B holds the lower triangle of B^k
-    s = std::make_unique<solve::SpdSolver>(options);
-    s->compute(L.B);
+    auto solver = std::make_unique<solve::SpdSolver>(options);
+    solver->compute(L.B);
+    s = std::move(solver);
 }
 
 Vector MultilevelSolver::solve_levels(const Vector& g_fine, int m) {

@@ -105,7 +105,7 @@ constexpr const char* kCgAdvice =
 }  // namespace
 
 std::string without_singular_hint(std::string message) {
-    for (const std::string advice :
+    for (const std::string& advice :
          {std::string("; ") + kCgAdvice, std::string(kDirichletHint) + " "})
         if (const std::size_t at = message.find(advice); at != std::string::npos)
             message.erase(at, advice.size());
@@ -581,13 +581,13 @@ struct SpdSolver::Impl {
         const bool given = options.max_factor_bytes > 0;
         if (!given && bytes < kMinCheckedFactorBytes) return;
         const double limit = given ? options.max_factor_bytes : available_memory();
-        CG_VERIFY(bytes <= limit,
-                  "solver ({}): the factor of the n = {} matrix ({} stored entries) would take "
-                  "{:.3g} GB, more than the {:.3g} GB {}; make the system smaller (e.g. more "
-                  "coarsening levels) or the memory larger, or solve a fine model iteratively "
-                  "(\"solver\": {{\"backend\": \"mra-pcg\"}})",
-                  name(), n, nnz, bytes / 1e9, limit / 1e9,
-                  given ? "allowed (max_factor_bytes)" : "available (MemAvailable)");
+        CG_VERIFY_AS(FactorTooLarge, bytes <= limit,
+                     "solver ({}): the factor of the n = {} matrix ({} stored entries) would take "
+                     "{:.3g} GB, more than the {:.3g} GB {}; make the system smaller (e.g. more "
+                     "coarsening levels) or the memory larger, or solve a fine model iteratively "
+                     "(\"solver\": {{\"backend\": \"mra-pcg\"}})",
+                     name(), n, nnz, bytes / 1e9, limit / 1e9,
+                     given ? "allowed (max_factor_bytes)" : "available (MemAvailable)");
     }
 
     [[noreturn]] void not_positive_definite(const std::string& detail) const {

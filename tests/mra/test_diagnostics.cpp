@@ -113,6 +113,54 @@ TEST(MraDiagnostics, ErrorSparsityAndStorage) {
     test::expect_error([&] { diagnose(h, p.f, given); }, "the fine solution has 3 entries");
 }
 
+// An intermediate level whose factorization would exceed max_factor_bytes is not solved: its
+// errors are NaN, its note names the level and the refused size, it has no solution; level 1 and
+// the fine level are as without the limit. Four levels of a 16x16 grid: A^1 has 18 rows, A^2 50
+// and A^3 162, each factorized nearly dense (8 n^2 bytes: 2.6 KB, 20 KB, 210 KB, up to CHOLMOD's
+// supernodal overhead), so a 12 KB limit passes level 1 alone; the test checks that first.
+TEST(MraDiagnostics, IntermediateLevelTooLargeToFactorizeIsNotSolved) {
+    const test::GridProblem p =
+        test::hung_problem(2, Eigen::Vector3i(16, 16, 1), 1.0, 1e3, test::checker_pattern);
+    const Hierarchy h =
+        build_hierarchy(p.mesh, p.K, p.bc.dofs, test::exact_options(4, Refinement::Linear));
+    constexpr double limit = 12e3;
+    solve::SolverOptions limited;
+    limited.max_factor_bytes = limit;
+    limited.lower_triangle = true;
+    ASSERT_NO_THROW(solve::SpdSolver(limited).analyze(h.level(1).A));
+    for (int k = 2; k <= 3; ++k)
+        ASSERT_THROW(solve::SpdSolver(limited).analyze(h.level(k).A), solve::FactorTooLarge) << k;
+
+    const Vector u = fem::solve_static(p.K, p.f, p.bc, {});
+    DiagnoseOptions o;
+    o.fine_solution = &u;
+    o.keep_solutions = true;
+    const Diagnostics full = diagnose(h, p.f, o);
+    o.max_factor_bytes = limit;
+    const Diagnostics d = diagnose(h, p.f, o);
+    ASSERT_EQ(d.levels.size(), 4u);
+    ASSERT_EQ(d.solutions.size(), 4u);
+    for (const int i : {0, 3}) {  // levels 1 and 4: the same solves
+        EXPECT_EQ(d.levels[i].error_over_u, full.levels[i].error_over_u) << i;
+        EXPECT_EQ(d.solutions[i], full.solutions[i]) << i;
+        EXPECT_TRUE(d.levels[i].solve_note.empty()) << i;
+    }
+    for (const int i : {1, 2}) {
+        const LevelDiagnostics& L = d.levels[static_cast<std::size_t>(i)];
+        EXPECT_TRUE(std::isnan(L.error_over_g) && std::isnan(L.error_over_u)) << i;
+        EXPECT_EQ(d.solutions[static_cast<std::size_t>(i)].size(), 0) << i;
+        EXPECT_NE(L.solve_note.find(fmt::format("level {} not solved", i + 1)), std::string::npos)
+            << L.solve_note;
+        EXPECT_NE(L.solve_note.find("allowed (max_factor_bytes)"), std::string::npos)
+            << L.solve_note;
+        EXPECT_GT(full.levels[static_cast<std::size_t>(i)].error_over_u, 0.0) << i;
+        EXPECT_TRUE(full.levels[static_cast<std::size_t>(i)].solve_note.empty()) << i;
+    }
+    // The coarse model's level is not skipped: a limit it exceeds is an error.
+    o.max_factor_bytes = 100;
+    EXPECT_THROW(diagnose(h, p.f, o), solve::FactorTooLarge);
+}
+
 // A factorization of the fine operator from the caller (the runtime's of K_ff) is the one the
 // fine level's smallest eigenvalue uses, so A^q is not factorized again: given that of 2 K_ff,
 // Lanczos on its inverse finds 2 lambda_min, while lambda_max (products with A^q itself) and the

@@ -376,6 +376,7 @@ TEST(SpdSolver, FactorLargerThanTheMemoryLimitIsRefused) {
         test::expect_error([&] { refusing.compute(*A); },
                            "GB allowed (max_factor_bytes); make the system smaller");
         test::expect_error([&] { refusing.compute(*A); }, R"("backend": "mra-pcg")");
+        EXPECT_THROW(refusing.compute(*A), solve::FactorTooLarge);
         solve::SolverOptions large;
         large.max_factor_bytes = 1e9;
         solve::SpdSolver solver(large);

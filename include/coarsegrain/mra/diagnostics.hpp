@@ -23,6 +23,10 @@ struct LevelDiagnostics {
     /// u^k = Φ^{k,T} (A^k)^{-1} g^k, u the fine solution and A = A^q (the paper's Fig. 9 metric).
     double error_over_g = 0;
     double error_over_u = 0;  ///< ||u^k - u||_A / ||u||_A
+    /// Why the level was not solved, if it was not (its errors are then NaN; not in the CSV):
+    /// an intermediate level 1 < k < q whose factorization would not fit
+    /// (DiagnoseOptions::max_factor_bytes).
+    std::string solve_note;
     /// Extreme eigenvalues and condition numbers of A^k (Figs. 7, 8) and B^k (NaN at level q);
     /// NaN also where skipped (spectrum_skipped).
     double lambda_min_A = 0, lambda_max_A = 0, cond_A = 0;
@@ -45,7 +49,8 @@ struct LevelDiagnostics {
 struct Diagnostics {
     std::vector<LevelDiagnostics> levels;  ///< levels[k-1] is level k, k = 1..q
     /// u^k = Φ^{k,T} (A^k)^{-1} g^k over all fine grid DOFs, solutions[k-1] for level k (u^q is
-    /// the fine solution); empty unless DiagnoseOptions::keep_solutions.
+    /// the fine solution, empty for a level not solved); none unless
+    /// DiagnoseOptions::keep_solutions.
     std::vector<Vector> solutions;
 };
 
@@ -65,6 +70,11 @@ struct DiagnoseOptions {
     /// instead of factorizing A^q again. Not with the penalty treatments, whose fine operator
     /// is their own.
     const solve::SpdSolver* fine_factorization = nullptr;
+    /// The most bytes a level's factorization may take (solve::SolverOptions::max_factor_bytes;
+    /// 0: the memory available when it is made). An intermediate level 1 < k < q whose
+    /// factorization would take more is not solved (LevelDiagnostics::solve_note): its A^k can
+    /// be far denser than the fine operator, and its solve is a figure, not the coarse model.
+    double max_factor_bytes = 0;
 };
 
 /// Extreme eigenvalues of a symmetric positive-definite sparse matrix.
@@ -90,6 +100,8 @@ double sparsity(const RunMatrix& M);
 /// and the smallest eigenvalue (A^q not at all with DiagnoseOptions::fine_factorization).
 /// @throws Error if g_fine has the wrong size or is zero on the hierarchy's fine DOFs, or a
 ///         fine solution or factorization is given for a penalty treatment or has the wrong size
+/// @throws solve::FactorTooLarge if the factorization of A^1, or of A^q without a fine
+///         solution, would exceed DiagnoseOptions::max_factor_bytes
 Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOptions& options = {});
 
 /// The table "mra_levels": one row per level, columns as the LevelDiagnostics fields in their

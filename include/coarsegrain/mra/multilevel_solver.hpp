@@ -14,8 +14,9 @@ namespace coarsegrain::mra {
 /// of eliminated Dirichlet DOFs are ignored on input and zero on output. Not thread-safe.
 class MultilevelSolver {
   public:
-    /// Keeps a reference to `h`, which must outlive the solver.
-    explicit MultilevelSolver(const Hierarchy& h);
+    /// Keeps a reference to `h`, which must outlive the solver. `max_factor_bytes` is the
+    /// solve::SolverOptions::max_factor_bytes of every factorization (0: the memory available).
+    explicit MultilevelSolver(const Hierarchy& h, double max_factor_bytes = 0);
     ~MultilevelSolver();
     MultilevelSolver(MultilevelSolver&&) noexcept;
 
@@ -33,7 +34,9 @@ class MultilevelSolver {
     /// with u^k = 0 at fixed_positions(h, k).
     Vector solve_level(const Vector& g_fine, int k);
 
-    /// Factorizes A^k / B^k now (otherwise on first use).
+    /// Factorizes A^k / B^k now (otherwise on first use). Every solve and factorization throws
+    /// solve::FactorTooLarge, before any numeric work, if a factorization it needs would exceed
+    /// max_factor_bytes.
     void factorize_level(int k);
     void factorize_wavelets(int k);
     /// The factorization of the operator a level-k solve factorizes (free_operator(h, k)),
@@ -45,6 +48,7 @@ class MultilevelSolver {
     Vector solve_on_level(const Vector& g, int k);
 
     const Hierarchy& m_h;
+    double m_max_factor_bytes;
     std::vector<std::unique_ptr<solve::SpdSolver>> m_A;  ///< index k-1, k = 1..q
     std::vector<std::unique_ptr<solve::SpdSolver>> m_B;  ///< index k-1, k = 1..q-1
 };

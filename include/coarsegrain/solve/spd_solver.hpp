@@ -20,6 +20,13 @@ enum class Backend {
     MraPcg,
 };
 
+/// A factorization was refused before any numeric work: its predicted size exceeds
+/// SolverOptions::max_factor_bytes (or the memory available). The message names the sizes.
+class FactorTooLarge : public ErrorOf<FactorTooLarge> {
+  public:
+    using ErrorOf::ErrorOf;
+};
+
 /// "cholmod", "ldlt", "cg", "mra-pcg".
 std::string backend_name(Backend b);
 /// Whether the backend iterates (cg, mra-pcg) rather than factorizes.
@@ -70,7 +77,7 @@ struct SolverOptions {
     /// cholmod: the most bytes a numeric factorization may allocate (the supernodal L, its
     /// largest update matrix and CHOLMOD's permuted copies of A, or the dense copy for a dense
     /// matrix), predicted by the symbolic analysis; analyze refuses a larger factorization
-    /// with an Error naming the sizes, instead of the operating system killing the process
+    /// with FactorTooLarge naming the sizes, instead of the operating system killing the process
     /// partway through the factorization. 0 (default): the memory available at analysis time
     /// (MemAvailable in /proc/meminfo; no limit where it cannot be read), checked for factors
     /// of 64 MB and more (the fine factorization of 64^3 hexes, 811,200 DOFs, needs 19.4 GB).
@@ -178,8 +185,8 @@ class SpdSolver {
     SpdSolver& operator=(SpdSolver&&) noexcept;
 
     /// Symbolic analysis (ordering) of A's pattern.
-    /// @throws Error if A is not square, empty or not compressed, or (cholmod) its factor would
-    ///         exceed SolverOptions::max_factor_bytes
+    /// @throws Error if A is not square, empty or not compressed
+    /// @throws FactorTooLarge (cholmod) if its factor would exceed SolverOptions::max_factor_bytes
     void analyze(const SparseMatrix& A);
     /// Numeric factorization. Analyzes A first if it was never analyzed or its pattern differs
     /// from the analyzed one (compared by size, nonzero count and a hash of the indices).
