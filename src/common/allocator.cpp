@@ -22,6 +22,12 @@ bool retain_freed_memory() {
 #endif
 }
 
+void return_free_memory() {
+#if defined(__GLIBC__)
+    malloc_trim(0);
+#endif
+}
+
 void release_pages(const void* begin, const void* end) {
 #if defined(__linux__)
     const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));

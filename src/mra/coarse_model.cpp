@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <limits>
 #include <memory>
+#include <numeric>
 
+#include "coarsegrain/common/allocator.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/fem/assembly.hpp"
 #include "coarsegrain/fem/stress.hpp"
@@ -156,6 +158,46 @@ double density(const M& m, std::int64_t nonzeros) {
     return size > 0 ? static_cast<double>(nonzeros) / size : 0.0;
 }
 
+/// P A P^T of the symmetric A whose lower triangle is `lower`, for P(dofs[i], i) = s[i] (n rows,
+/// dofs increasing), with both triangles stored, formed in one pass: A^1 can be dense (9,450
+/// rows at the 56^3 checker), and the sparse products P A P^T held three copies of it.
+SparseMatrix embedded_symmetric(const SparseMatrix& lower, const IndexVector& dofs, const Vector& s,
+                                Index n) {
+    const Index m = lower.cols();
+    CG_VERIFY(lower.rows() == m && dofs.size() == m && s.size() == m &&
+                  (m == 0 || (dofs[0] >= 0 && dofs[m - 1] < n)) &&
+                  std::is_sorted(dofs.begin(), dofs.end()),
+              "mra: a {}x{} operator embedded by {} increasing DOFs of {}", lower.rows(), m,
+              dofs.size(), n);
+    std::vector<Index> count(static_cast<std::size_t>(m), 0);  // entries of the whole column
+    for (Index j = 0; j < m; ++j)
+        for (SparseMatrix::InnerIterator it(lower, j); it; ++it) {
+            ++count[static_cast<std::size_t>(j)];
+            if (it.row() != j) ++count[static_cast<std::size_t>(it.row())];
+        }
+    SparseMatrix K(n, n);
+    Index* outer = K.outerIndexPtr();
+    std::fill(outer, outer + n + 1, 0);
+    for (Index j = 0; j < m; ++j) outer[dofs[j] + 1] = count[static_cast<std::size_t>(j)];
+    std::partial_sum(outer, outer + n + 1, outer);
+    K.resizeNonZeros(outer[n]);
+    // Column j receives its entries above the diagonal from the columns before it, in their
+    // order, then its own lower part: rows in increasing order, as dofs keeps it.
+    std::vector<Index> next(static_cast<std::size_t>(m));
+    for (Index j = 0; j < m; ++j) next[static_cast<std::size_t>(j)] = outer[dofs[j]];
+    const auto put = [&](Index row, Index col, double v) {
+        const Index at = next[static_cast<std::size_t>(col)]++;
+        K.innerIndexPtr()[at] = dofs[row];
+        K.valuePtr()[at] = s[row] * v * s[col];
+    };
+    for (Index j = 0; j < m; ++j)
+        for (SparseMatrix::InnerIterator it(lower, j); it; ++it) {
+            put(it.row(), j, it.value());
+            if (it.row() != j) put(j, it.row(), it.value());
+        }
+    return K;
+}
+
 }  // namespace
 
 coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierarchy,
@@ -184,9 +226,12 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
         for (Index i = 0; i < L1.dofs.size(); ++i) t.emplace_back(L1.dofs[i], i, s[i]);
         P.setFromTriplets(t.begin(), t.end());
     }
-    m.K = P * (K_fine ? galerkin_operator(h, *K_fine, 1) : symmetric_from_lower(L1.A)) *
-          SparseMatrix(P.transpose());
-    m.K.makeCompressed();
+    if (K_fine) {
+        m.K = P * galerkin_operator(h, *K_fine, 1) * SparseMatrix(P.transpose());
+        m.K.makeCompressed();
+    } else {
+        m.K = embedded_symmetric(L1.A, L1.dofs, s, n);
+    }
     m.f = P * coarse_grain(h, f_fine, 1);
     m.to_fine = coarsen::FineMap(h.fine_grid_dofs(), n,
                                  [hierarchy, Pt = SparseMatrix(P.transpose())](const Vector& u) {
@@ -283,10 +328,12 @@ coarsen::CoarseModel build_coarse_model(const Options& options, const CompareOpt
                                         const std::vector<mesh::Mesh>& coarser_levels,
                                         const sim::DynamicsOptions* dynamics) {
     const auto build = [&](const SparseMatrix& A) {
-        return std::make_shared<const Hierarchy>(
+        auto h = std::make_shared<const Hierarchy>(
             coarser_levels.empty()
                 ? build_hierarchy(fine.mesh, A, fine.bc.dofs, options, &fine.materials)
                 : build_hierarchy(coarser_levels, fine.mesh, A, fine.bc.dofs, options));
+        return_free_memory();  // the build's temporaries, before the coarse model and its solves
+        return h;
     };
     for (std::size_t k = 0; k < fine.bc.dofs.size(); ++k)
         CG_VERIFY(fine.bc.values[static_cast<Index>(k)] == 0.0,

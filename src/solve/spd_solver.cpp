@@ -1,9 +1,6 @@
 #include "coarsegrain/solve/spd_solver.hpp"
 
 #include <dlfcn.h>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 #include <omp.h>
 
 #include <Eigen/CholmodSupport>
@@ -21,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "coarsegrain/common/allocator.hpp"
 #include "coarsegrain/common/error.hpp"
 #include "coarsegrain/common/hash.hpp"
 
@@ -79,14 +77,12 @@ constexpr std::array<std::size_t, 3> kSupernodeRelaxation{32, 128, 512};
 constexpr double kMinCheckedFactorBytes = 64.0 * (1 << 20);
 
 /// MemAvailable of /proc/meminfo in bytes, or infinity where it cannot be read. The process's
-/// free heap pages are returned to the kernel first (glibc's malloc_trim), so that memory the
+/// free heap pages are returned to the kernel first (return_free_memory), so that memory the
 /// program freed but its allocator kept (e.g. after retain_freed_memory) counts as available:
 /// after the hierarchy's build at 64^3 (bench_mra, with retain_freed_memory) MemAvailable read
 /// 16.0 GB with the trim and 10.6 GB without.
 double available_memory() {
-#if defined(__GLIBC__)
-    malloc_trim(0);
-#endif
+    return_free_memory();
     std::ifstream in("/proc/meminfo");
     std::string line;
     while (std::getline(in, line)) {

@@ -16,6 +16,13 @@ namespace coarsegrain {
 /// both settings (false under a sanitizer's or another allocator).
 bool retain_freed_memory();
 
+/// Returns the free memory the allocator keeps (retain_freed_memory) to the system (glibc's
+/// malloc_trim: the free heap's whole pages; a no-op elsewhere). After a phase that freed
+/// gigabytes in blocks of many sizes, the next allocations need not fit the holes it left, so
+/// they would grow the resident set beside them: the CLI on the 56^3 checker was killed for
+/// memory after the hierarchy's build, at 24.4 GB.
+void return_free_memory();
+
 /// Returns the whole pages within [begin, end) to the system, whatever the allocator keeps:
 /// memory the program reads no more but cannot free yet, as part of a larger allocation (its
 /// contents are lost; the pages read as zeros if touched again). A no-op off Linux.
