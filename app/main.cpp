@@ -169,8 +169,9 @@ int main(int argc, char** argv) {
     demo->add_option("--out", demo_out, "output folder")->capture_default_str();
     demo->add_option("--scale", demo_scale,
                      "grid resolution factor: 1 = 48x12x12 hexes, 0.67 = 32x8x8, 0.33 = 16x4x4\n"
-                     "(16b x 4b x 4b hexes, b = round(3 S))")
-        ->check(CLI::Range(0.25, 1.0))
+                     "(16b x 4b x 4b hexes, b = round(3 S)); 1.33 = 64x16x16 and 1.67 = 80x20x20\n"
+                     "take minutes and GBs (docs/guide.md, \"The demo\")")
+        ->check(CLI::Range(0.25, 1.67))
         ->capture_default_str();
 
     try {

@@ -109,7 +109,8 @@ void expect_picture(const std::string& file) {
 // --scale picks 16b x 4b x 4b cubic cells, b = round(3 S): whole coarse grids 4x coarser for
 // the 3 levels of the hierarchy and the effective tensors' tets.
 TEST(CliDemo, ScaleGivesCubicCellsInWholeCoarseGrids) {
-    const std::map<double, int> blocks = {{1.0, 3}, {0.67, 2}, {0.5, 2}, {0.33, 1}, {0.25, 1}};
+    const std::map<double, int> blocks = {{1.67, 5}, {1.33, 4}, {1.0, 3}, {0.67, 2},
+                                          {0.5, 2},  {0.33, 1}, {0.25, 1}};
     for (const auto& [scale, b] : blocks) {
         SCOPED_TRACE(scale);
         const json d = scene::demo_scene(scale);
