@@ -159,8 +159,8 @@ double density(const M& m, std::int64_t nonzeros) {
 }
 
 /// P A P^T of the symmetric A whose lower triangle is `lower`, for P(dofs[i], i) = s[i] (n rows,
-/// dofs increasing), with both triangles stored, formed in one pass: A^1 can be dense (9,450
-/// rows at the 56^3 checker), and the sparse products P A P^T held three copies of it.
+/// dofs increasing), with both triangles stored, formed in one pass: A^1 can be dense (10,125
+/// rows for the touching cubes at 56^3), and the sparse products P A P^T held three copies of it.
 SparseMatrix embedded_symmetric(const SparseMatrix& lower, const IndexVector& dofs, const Vector& s,
                                 Index n) {
     const Index m = lower.cols();

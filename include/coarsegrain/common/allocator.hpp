@@ -19,8 +19,8 @@ bool retain_freed_memory();
 /// Returns the free memory the allocator keeps (retain_freed_memory) to the system (glibc's
 /// malloc_trim: the free heap's whole pages; a no-op elsewhere). After a phase that freed
 /// gigabytes in blocks of many sizes, the next allocations need not fit the holes it left, so
-/// they would grow the resident set beside them: the CLI on the 56^3 checker was killed for
-/// memory after the hierarchy's build, at 24.4 GB.
+/// they would grow the resident set beside them (the CLI on the touching cubes at 56^3 was
+/// killed for memory after the hierarchy's build, at 24.4 GB).
 void return_free_memory();
 
 /// Returns the whole pages within [begin, end) to the system, whatever the allocator keeps:
