@@ -161,6 +161,7 @@ double density(const M& m, std::int64_t nonzeros) {
 /// P A P^T of the symmetric A whose lower triangle is `lower`, for P(dofs[i], i) = s[i] (n rows,
 /// dofs increasing), with both triangles stored, formed in one pass: A^1 can be dense (10,125
 /// rows for the touching cubes at 56^3), and the sparse products P A P^T held three copies of it.
+/// The coarse model's K and Galerkin mass.
 SparseMatrix embedded_symmetric(const SparseMatrix& lower, const IndexVector& dofs, const Vector& s,
                                 Index n) {
     const Index m = lower.cols();
@@ -188,7 +189,7 @@ SparseMatrix embedded_symmetric(const SparseMatrix& lower, const IndexVector& do
     const auto put = [&](Index row, Index col, double v) {
         const Index at = next[static_cast<std::size_t>(col)]++;
         K.innerIndexPtr()[at] = dofs[row];
-        K.valuePtr()[at] = s[row] * v * s[col];
+        K.valuePtr()[at] = v * (s[row] * s[col]);  // the same product for both triangles
     };
     for (Index j = 0; j < m; ++j)
         for (SparseMatrix::InnerIterator it(lower, j); it; ++it) {
@@ -226,21 +227,16 @@ coarsen::CoarseModel coarse_model(const std::shared_ptr<const Hierarchy>& hierar
         for (Index i = 0; i < L1.dofs.size(); ++i) t.emplace_back(L1.dofs[i], i, s[i]);
         P.setFromTriplets(t.begin(), t.end());
     }
-    if (K_fine) {
-        m.K = P * galerkin_operator(h, *K_fine, 1) * SparseMatrix(P.transpose());
-        m.K.makeCompressed();
-    } else {
-        m.K = embedded_symmetric(L1.A, L1.dofs, s, n);
-    }
+    m.K = K_fine ? embedded_symmetric(galerkin_operator_lower(h, *K_fine, 1), L1.dofs, s, n)
+                 : embedded_symmetric(L1.A, L1.dofs, s, n);
     m.f = P * coarse_grain(h, f_fine, 1);
     m.to_fine = coarsen::FineMap(h.fine_grid_dofs(), n,
                                  [hierarchy, Pt = SparseMatrix(P.transpose())](const Vector& u) {
                                      return reconstruct(*hierarchy, Pt * u, 1);
                                  });
-    m.mass = [hierarchy, P](const SparseMatrix& M) -> SparseMatrix {
-        SparseMatrix Mc = P * galerkin_operator(*hierarchy, M, 1) * SparseMatrix(P.transpose());
-        Mc.makeCompressed();
-        return Mc;
+    m.mass = [hierarchy, s, n](const SparseMatrix& M) {
+        return embedded_symmetric(galerkin_operator_lower(*hierarchy, M, 1),
+                                  hierarchy->level(1).dofs, s, n);
     };
     // Held at zero: the DOFs without a basis function, and the boundary-blind level's fixed ones.
     std::vector<Index> held(L1.dropped_dofs.data(),

@@ -951,6 +951,10 @@ Vector reconstruct(const Hierarchy& h, const Vector& u_k, int k) {
 }
 
 SparseMatrix galerkin_operator(const Hierarchy& h, const SparseMatrix& X, int k) {
+    return symmetric_from_lower(galerkin_operator_lower(h, X, k));
+}
+
+SparseMatrix galerkin_operator_lower(const Hierarchy& h, const SparseMatrix& X, int k) {
     const Index n = h.fine_grid_dofs();
     CG_VERIFY(X.rows() == n && X.cols() == n, "mra: a {}x{} operator on {} fine grid DOFs",
               X.rows(), X.cols(), n);
@@ -962,8 +966,10 @@ SparseMatrix galerkin_operator(const Hierarchy& h, const SparseMatrix& X, int k)
     SparseMatrix Y = S * X * SparseMatrix(S.transpose());
     for (int l = h.num_levels() - 1; l >= k; --l) {  // the products that make A^l
         const Level& L = h.level(l);
-        Y = symmetric_from_lower(detail::congruence(L.C_adapted.sparse(), Y, dof_groups(h, L)));
+        Y = detail::congruence(L.C_adapted.sparse(), Y, dof_groups(h, L));  // its lower triangle
+        if (l > k) Y = symmetric_from_lower(Y);
     }
+    if (k == h.num_levels()) Y = Y.triangularView<Eigen::Lower>();
     Y.makeCompressed();
     return Y;
 }

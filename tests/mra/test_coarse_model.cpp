@@ -88,6 +88,28 @@ TEST(MraCoarseModel, CoarsestLevelAsCoarseModel) {
     }
 }
 
+// The coarse model's Galerkin mass of the fine stiffness is its stiffness: both are P Φ^1 K Φ^{1,T}
+// P^T, the one by the products of the build (A^k = C̃^k A^{k+1} C̃^{k,T}), the other by
+// galerkin_operator's, in another storage and order: round-off, 1e-12 relative. Global solves
+// and 2 rings (relaxed, cell-wise), both refinements (Dirac drops the clamped coarse DOFs, whose
+// rows and columns stay empty).
+TEST(MraCoarseModel, GalerkinMassOfTheStiffnessIsTheStiffness) {
+    for (const char* refinement : {"linear", "dirac"})
+        for (const json& radius : {json("inf"), json(2)}) {
+            json j = scene_json();
+            j["coarse"]["refinement"] = refinement;
+            j["coarse"]["radius"] = radius;
+            if (radius != json("inf") && std::string(refinement) == "dirac") continue;
+            const scene::Scene s = scene::parse_scene(j, "test.json", "");
+            const scene::FineModel fine = scene::build_fine_model(s);
+            const coarsen::CoarseModel m = coarsen::build_coarse_model(s, fine, "mra");
+            const Matrix K(m.K), KM(m.mass(fine.K));
+            ASSERT_GT(K.norm(), 0.0);
+            EXPECT_LT((KM - K).norm(), 1e-12 * K.norm()) << refinement << " " << radius;
+            EXPECT_EQ(Matrix(K - K.transpose()).norm(), 0.0);
+        }
+}
+
 // The comparison with the fine solution takes the fine solve's factorization of K_ff for the
 // fine level's spectrum instead of factorizing the same operator again: given a solution whose
 // factorization is that of 2 K_ff, the fine level's lambda_min doubles. The runtime keeps the

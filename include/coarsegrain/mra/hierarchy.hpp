@@ -205,6 +205,9 @@ SparseMatrix basis(const Hierarchy& h, int k);
 /// l = q-1..k, i.e. Φ^k X Φ^{k,T}. Both triangles stored.
 /// @throws Error if k is not in 1..q or X is not fine grid DOFs square
 SparseMatrix galerkin_operator(const Hierarchy& h, const SparseMatrix& X, int k);
+/// galerkin_operator's lower triangle, as Level::A keeps A^k, without the whole matrix.
+/// @throws Error as galerkin_operator
+SparseMatrix galerkin_operator_lower(const Hierarchy& h, const SparseMatrix& X, int k);
 
 /// Φ^{k,T} u^k over all fine grid DOFs, computed level by level as
 /// u^{l+1} = C̃^{l,T} u^l for l = k..q-1 (zeros at eliminated DOFs), without Φ^k.
