@@ -100,14 +100,13 @@ double symmetric_sparsity(const SparseMatrix& lower) {
     return size > 0 ? 1.0 - static_cast<double>(symmetric_nonzeros(lower)) / size : 0.0;
 }
 
-/// u^k of level k < q by `solver`, or, for 1 < k < q whose factorization is refused for its
-/// size, an empty vector with the reason in L.solve_note.
-Vector level_solution(MultilevelSolver& solver, const Vector& g_fine, int k, int q,
-                      LevelDiagnostics& L) {
+/// u^k of level k < q by `solver`, or, for k > 1 whose factorization is refused for its size, an
+/// empty vector with the reason in L.solve_note.
+Vector level_solution(MultilevelSolver& solver, const Vector& g_fine, int k, LevelDiagnostics& L) {
     try {
         return solver.solve_level(g_fine, k);
     } catch (const solve::FactorTooLarge& e) {
-        if (k == 1 || k == q) throw;
+        if (k == 1) throw;
         L.solve_note = fmt::format("level {} not solved: {}", k, e.what());
         return {};
     }
@@ -182,7 +181,7 @@ Diagnostics diagnose(const Hierarchy& h, const Vector& g_fine, const DiagnoseOpt
         L.k = k;
         const SparseMatrix& A = k == q ? h.A_fine : h.level(k).A;
         L.dofs = A.rows();
-        Vector u_k = k == q ? u_grid : level_solution(solver, g_fine, k, q, L);
+        Vector u_k = k == q ? u_grid : level_solution(solver, g_fine, k, L);
         if (u_k.size() > 0) {
             const Vector e = restrict_to(u_k, h.fine_dofs) - u;
             L.error_over_g = energy_norm(h.A_fine, e) / g_norm;
